@@ -1,0 +1,69 @@
+// `voca`: the VOCA-RT command line. Subcommands register themselves (command.h).
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+
+#include <fmt/core.h>
+
+#include "tools/voca/command.h"
+#include "voca/core/error.h"
+
+namespace voca::cli {
+
+namespace {
+std::vector<CommandSpec>& registry() {
+  static std::vector<CommandSpec> commands;
+  return commands;
+}
+}  // namespace
+
+bool registerCommand(CommandSpec spec) {
+  registry().push_back(std::move(spec));
+  return true;
+}
+
+const std::vector<CommandSpec>& registeredCommands() { return registry(); }
+
+}  // namespace voca::cli
+
+int main(int argc, char** argv) {
+  using namespace voca::cli;
+  CLI::App app{
+      "VOCA-RT: causal stereo visual odometry on H.264 video, with the codec's motion vectors as\n"
+      "priors for KLT tracking. Run `voca <command> --help` for a command's options."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "voca 0.1.0");
+
+  std::vector<CommandSpec> commands = registeredCommands();
+  std::stable_sort(commands.begin(), commands.end(),
+                   [](const CommandSpec& a, const CommandSpec& b) { return a.order < b.order; });
+  std::vector<std::pair<CLI::App*, Runner>> runners;
+  for (const CommandSpec& spec : commands) {
+    CLI::App* sub = app.add_subcommand(spec.name, spec.summary);
+    runners.emplace_back(sub, spec.configure(*sub));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  for (auto& [sub, run] : runners) {
+    if (!sub->parsed()) continue;
+    try {
+      return run();
+    } catch (const voca::InputError& e) {
+      fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
+      return 1;
+    } catch (const voca::RuntimeFailure& e) {
+      fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
+      return 1;
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "voca {}: internal error: {}\n", sub->get_name(), e.what());
+      return 3;
+    }
+  }
+  return 0;
+}
