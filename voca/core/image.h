@@ -79,7 +79,14 @@ class Image {
   int height_ = 0;
 };
 
+// An 8-bit RGB pixel, for visualisations (overlays, motion-vector pictures).
+struct Rgb8 {
+  std::uint8_t r = 0, g = 0, b = 0;
+};
+
 using GrayImage = Image<std::uint8_t>;
 using GrayView = ImageView<const std::uint8_t>;
+using RgbImage = Image<Rgb8>;
+using RgbView = ImageView<const Rgb8>;
 
 }  // namespace voca
