@@ -1,0 +1,219 @@
+// Dataset readers on synthetic folders written to scratch space, and the EuRoC writer.
+
+#include <array>
+#include <fstream>
+#include <string>
+
+#include "drivers/dataset/dataset.h"
+#include "tests/test_support.h"
+#include "voca/core/error.h"
+#include "voca/image/png_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using voca::Dataset;
+using voca::DatasetLayout;
+
+std::string errorOf(const fs::path& path) {
+  try {
+    voca::openDataset(path);
+  } catch (const voca::InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+voca::GrayImage pattern(int seed) {
+  voca::GrayImage image(16, 12);
+  for (int y = 0; y < 12; ++y) {
+    for (int x = 0; x < 16; ++x) image(x, y) = static_cast<std::uint8_t>(seed * 31 + x * 3 + y * 5);
+  }
+  return image;
+}
+
+// Writes frames t = 1000, 2000, ... with images distinguishable per camera and frame.
+void writeEuroc(const fs::path& root, int frames) {
+  voca::EurocWriter writer(root);
+  for (int i = 0; i < frames; ++i) {
+    const voca::GrayImage left = pattern(2 * i), right = pattern(2 * i + 1);
+    const std::array<voca::GrayView, 2> views = {left.view(), right.view()};
+    writer.addFrame(1000 * (i + 1), views);
+  }
+  writer.finish();
+  CHECK(writer.frameCount() == frames);
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+}  // namespace
+
+TEST_CASE("EurocWriter output is re-read by openDataset") {
+  voca::test::ScratchDir dir("dataset-writer");
+  writeEuroc(dir.path(), 5);
+  for (const fs::path& root : {dir.path(), dir / "mav0"}) {
+    const Dataset dataset = voca::openDataset(root);
+    CHECK(dataset.layout == DatasetLayout::kEuroc);
+    CHECK(dataset.warnings.empty());
+    CHECK_FALSE(dataset.ground_truth.has_value());
+    REQUIRE(dataset.frames.size() == 5);
+    for (int i = 0; i < 5; ++i) {
+      const voca::StereoFrameRef& frame = dataset.frames[static_cast<size_t>(i)];
+      CHECK(frame.t_ns == 1000 * (i + 1));
+      const voca::GrayImage left = voca::readPngGray(frame.left), right = voca::readPngGray(frame.right);
+      CHECK(left(3, 4) == pattern(2 * i)(3, 4));
+      CHECK(right(3, 4) == pattern(2 * i + 1)(3, 4));
+    }
+  }
+  // A calibration is found beside the dataset: a Basalt json by name, else nothing (no sensor.yaml here).
+  CHECK_FALSE(voca::openDataset(dir.path()).calibration.has_value());
+  writeText(dir / "my_calib.json", "{}");
+  REQUIRE(voca::openDataset(dir.path()).calibration.has_value());
+  CHECK(voca::openDataset(dir.path()).calibration->filename() == "my_calib.json");
+  CHECK(voca::openDataset(dir / "mav0").calibration->filename() == "my_calib.json");
+}
+
+TEST_CASE("EurocWriter rejects wrong image counts and timestamps going back") {
+  voca::test::ScratchDir dir("dataset-writer-bad");
+  voca::EurocWriter writer(dir.path());
+  const voca::GrayImage image = pattern(0);
+  const std::array<voca::GrayView, 1> one = {image.view()};
+  CHECK_THROWS_AS(writer.addFrame(10, one), voca::InputError);
+  const std::array<voca::GrayView, 2> two = {image.view(), image.view()};
+  writer.addFrame(10, two);
+  CHECK_THROWS_AS(writer.addFrame(10, two), voca::InputError);
+  CHECK(writer.frameCount() == 1);
+}
+
+TEST_CASE("EuRoC rows without images and unpaired timestamps are skipped with warnings") {
+  voca::test::ScratchDir dir("dataset-missing");
+  writeEuroc(dir.path(), 6);
+  fs::remove(dir / "mav0/cam1/data/3000.png");
+  fs::remove(dir / "mav0/cam0/data/5000.png");
+  // A right row whose timestamp has no left partner.
+  const voca::GrayImage image = pattern(9);
+  voca::writePngGray(dir / "mav0/cam1/data/6500.png", image.view());
+  std::ofstream(dir / "mav0/cam1/data.csv", std::ios::app) << "6500,6500.png\n";
+
+  const Dataset dataset = voca::openDataset(dir.path());
+  REQUIRE(dataset.frames.size() == 4);
+  CHECK(dataset.frames[2].t_ns == 4000);
+  CHECK(dataset.frames[3].t_ns == 6000);
+  REQUIRE(dataset.warnings.size() == 4);
+  CHECK(
+      contains(dataset.warnings[0], "cam0/data.csv: 1 of 6 rows have no image file and were skipped (data/5000.png)"));
+  CHECK(
+      contains(dataset.warnings[1], "cam1/data.csv: 1 of 7 rows have no image file and were skipped (data/3000.png)"));
+  CHECK(contains(dataset.warnings[2], "1 cam0 images have no cam1 image"));
+  // cam1's 5000 lost its partner (the left image is gone) and 6500 never had one.
+  CHECK(contains(dataset.warnings[3],
+                 "2 cam1 images have no cam0 image with the same timestamp and were skipped (t_ns 5000, 6500)"));
+}
+
+TEST_CASE("malformed EuRoC csv lines are errors naming file and line") {
+  voca::test::ScratchDir dir("dataset-csv");
+  writeEuroc(dir.path(), 3);
+  const fs::path csv = dir / "mav0/cam0/data.csv";
+  SUBCASE("not a number") {
+    writeText(csv, "#timestamp [ns],filename\n1000,1000.png\nabc,2000.png\n");
+    const std::string error = errorOf(dir.path());
+    CHECK(contains(error, "cam0/data.csv:3: expected '<timestamp ns>,<image file name>', got 'abc,2000.png'"));
+  }
+  SUBCASE("no file name") {
+    writeText(csv, "#timestamp [ns],filename\n\n1000,1000.png\n2000\n");
+    CHECK(contains(errorOf(dir.path()), "cam0/data.csv:4: expected"));
+  }
+  SUBCASE("timestamps going back") {
+    writeText(csv, "1000,1000.png\n3000,3000.png\n2000,2000.png\n");
+    CHECK(contains(errorOf(dir.path()), "cam0/data.csv:3: timestamp 2000 is not after the previous row's 3000"));
+  }
+  SUBCASE("cam1 csv missing") {
+    fs::remove(dir / "mav0/cam1/data.csv");
+    CHECK(contains(errorOf(dir.path()), "cam1/data.csv: missing"));
+  }
+  SUBCASE("no image pairs at all") {
+    fs::remove_all(dir / "mav0/cam1/data");
+    CHECK(contains(errorOf(dir.path()), "no stereo frame"));
+  }
+}
+
+TEST_CASE("missing folders and unknown layouts are explained") {
+  voca::test::ScratchDir dir("dataset-unknown");
+  CHECK(contains(errorOf(dir / "nope"), "nope: dataset folder not found"));
+  writeText(dir / "file.txt", "x");
+  CHECK(contains(errorOf(dir / "file.txt"), "not a folder"));
+  fs::create_directories(dir / "empty");
+  const std::string error = errorOf(dir / "empty");
+  CHECK(contains(error, "unknown dataset layout"));
+  CHECK(contains(error, "mav0/cam0/data.csv"));
+  CHECK(contains(error, "image_0/"));
+}
+
+TEST_CASE("KITTI sequence folder with ground truth two levels up") {
+  voca::test::ScratchDir dir("dataset-kitti");
+  const fs::path seq = dir / "sequences" / "03";
+  fs::create_directories(seq / "image_0");
+  fs::create_directories(seq / "image_1");
+  const voca::GrayImage image = pattern(1);
+  for (int i = 0; i < 4; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d.png", i);
+    voca::writePngGray(seq / "image_0" / name, image.view());
+    if (i != 2) voca::writePngGray(seq / "image_1" / name, image.view());
+  }
+  writeText(seq / "times.txt", "0.000000e+00\n1.000000e-01\n2.0e-01\n0.3\n");
+  writeText(seq / "calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeText(dir / "poses" / "03.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
+
+  // Given with a trailing separator, the sequence name still comes out right.
+  const Dataset dataset = voca::openDataset(seq.string() + "/");
+  CHECK(dataset.layout == DatasetLayout::kKitti);
+  REQUIRE(dataset.frames.size() == 3);
+  CHECK(dataset.frames[0].t_ns == 0);
+  CHECK(dataset.frames[1].t_ns == 100000000);
+  CHECK(dataset.frames[2].t_ns == 300000000);
+  CHECK(dataset.frames[2].left.filename() == "000003.png");
+  CHECK(dataset.frames[2].right.parent_path().filename() == "image_1");
+  REQUIRE(dataset.warnings.size() == 1);
+  CHECK(contains(dataset.warnings[0], "1 of 4 frames lack an image and were skipped (image_1/000002.png)"));
+  REQUIRE(dataset.ground_truth.has_value());
+  CHECK(fs::equivalent(*dataset.ground_truth, dir / "poses" / "03.txt"));
+  REQUIRE(dataset.calibration.has_value());
+  CHECK(dataset.calibration->filename() == "calib.txt");
+
+  writeText(seq / "times.txt", "0.0\n0.1\nten\n");
+  CHECK(contains(errorOf(seq), "times.txt:3: expected a time in seconds, got 'ten'"));
+  fs::remove_all(seq / "image_1");
+  CHECK(contains(errorOf(seq), "image_1: missing"));
+}
+
+TEST_CASE("VOCA video layout lists videos and frame timestamps") {
+  voca::test::ScratchDir dir("dataset-video");
+  for (const char* cam : {"cam0", "cam1"}) {
+    writeText(dir / "mav0" / cam / "data.mp4", "not decoded here");
+    writeText(dir / "mav0" / cam / "data.csv", "#timestamp [ns],filename\n100,100.png\n200,200.png\n300,300.png\n");
+  }
+  const Dataset dataset = voca::openDataset(dir.path());
+  CHECK(dataset.layout == DatasetLayout::kVocaVideo);
+  CHECK(dataset.video_left == dir / "mav0/cam0/data.mp4");
+  CHECK(dataset.video_right == dir / "mav0/cam1/data.mp4");
+  REQUIRE(dataset.frames.size() == 3);
+  CHECK(dataset.frames[1].t_ns == 200);
+  CHECK(dataset.frames[1].left.empty());
+  CHECK(dataset.warnings.empty());
+
+  // Rows pair by position; a shorter right list truncates with a warning.
+  writeText(dir / "mav0/cam1/data.csv", "100\n200\n");
+  const Dataset shorter = voca::openDataset(dir / "mav0");
+  CHECK(shorter.frames.size() == 2);
+  REQUIRE(shorter.warnings.size() == 1);
+  CHECK(contains(shorter.warnings[0], "using the first 2 frames"));
+
+  fs::remove(dir / "mav0/cam1/data.mp4");
+  CHECK(contains(errorOf(dir.path()), "cam1/data.mp4: missing"));
+}
