@@ -1,0 +1,189 @@
+// MotionField: O(1) lookup correctness, "no vector" cases, fixed capacity, I-frame bridging and
+// median-threshold outlier flags.
+
+#include <doctest/doctest.h>
+
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "voca/motion/motion_field.h"
+
+using voca::MotionBlock;
+using voca::MotionField;
+using voca::PictureType;
+using voca::RefDirection;
+
+namespace {
+
+struct Rect {
+  int x, y, w, h;
+};
+
+// Tiles the image with macroblock-like partitions (16x16, 16x8, 8x16, 8x8 and a few intra holes)
+// and returns, per pixel, the index of the block that covers it (-1 for holes).
+std::vector<int> tileRandom(MotionField& field, int width, int height, std::mt19937& rng) {
+  std::vector<int> owner(static_cast<std::size_t>(width * height), -1);
+  std::uniform_int_distribution<int> kind(0, 4);
+  std::uniform_real_distribution<float> mv(-20.f, 20.f);
+  auto add = [&](Rect r) {
+    const int before = static_cast<int>(field.blocks().size());
+    if (!field.addBlock(r.x, r.y, r.w, r.h, mv(rng), mv(rng))) return;
+    for (int y = std::max(0, r.y); y < std::min(height, r.y + r.h); ++y)
+      for (int x = std::max(0, r.x); x < std::min(width, r.x + r.w); ++x)
+        owner[static_cast<std::size_t>(y * width + x)] = before;
+  };
+  for (int my = 0; my < height; my += 16) {
+    for (int mx = 0; mx < width; mx += 16) {
+      switch (kind(rng)) {
+        case 0:
+          add({mx, my, 16, 16});
+          break;
+        case 1:
+          add({mx, my, 16, 8});
+          add({mx, my + 8, 16, 8});
+          break;
+        case 2:
+          add({mx, my, 8, 16});
+          add({mx + 8, my, 8, 16});
+          break;
+        case 3:
+          for (int i = 0; i < 4; ++i) add({mx + 8 * (i & 1), my + 8 * (i >> 1), 8, 8});
+          break;
+        default:
+          break;  // intra macroblock: no vector
+      }
+    }
+  }
+  field.finalize();
+  return owner;
+}
+
+}  // namespace
+
+TEST_CASE("every pixel maps to the block covering it, uncovered pixels to none") {
+  std::mt19937 rng(7);
+  // 200x120 is not a multiple of 16 (macroblocks overhang the right/bottom edge, as in a codec's
+  // padded picture) to exercise clipping.
+  const int width = 200, height = 120;
+  MotionField field(256, 128);
+  field.reset(width, height, PictureType::kP);
+  const std::vector<int> owner = tileRandom(field, width, height, rng);
+  REQUIRE(field.hasVectors());
+  int mismatches = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const MotionBlock* block = field.blockAt(x, y);
+      const int expected = owner[static_cast<std::size_t>(y * width + x)];
+      const int got = block == nullptr ? -1 : static_cast<int>(block - field.blocks().data());
+      mismatches += expected != got ? 1 : 0;
+    }
+  }
+  CHECK(mismatches == 0);
+  // Outside the image there is no vector.
+  CHECK(field.blockAt(-1, 0) == nullptr);
+  CHECK(field.blockAt(width, 0) == nullptr);
+  CHECK(field.blockAt(0, height) == nullptr);
+  CHECK_FALSE(field.forwardFlowAt(-0.5f, 3.f).has_value());
+}
+
+TEST_CASE("forward flow is the stored displacement of the block at a sub-pixel position") {
+  MotionField field(64, 64);
+  field.reset(64, 64, PictureType::kP);
+  REQUIRE(field.addBlock(16, 16, 16, 16, 1.25f, -0.5f));
+  field.finalize();
+  const auto flow = field.forwardFlowAt(31.9f, 16.0f);
+  REQUIRE(flow.has_value());
+  CHECK((*flow)(0) == doctest::Approx(1.25f));
+  CHECK((*flow)(1) == doctest::Approx(-0.5f));
+  CHECK_FALSE(field.forwardFlowAt(32.0f, 16.0f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(15.99f, 20.0f).has_value());
+}
+
+TEST_CASE("past-reference vectors win over future-reference ones in the lookup") {
+  MotionField field(32, 32);
+  field.reset(32, 32, PictureType::kB);
+  REQUIRE(field.addBlock(0, 0, 16, 16, 1.f, 0.f, RefDirection::kPast));
+  REQUIRE(field.addBlock(0, 0, 16, 16, 5.f, 0.f, RefDirection::kFuture));
+  REQUIRE(field.addBlock(16, 0, 16, 16, 7.f, 0.f, RefDirection::kFuture));
+  field.finalize();
+  CHECK(field.blockAt(3, 3)->ref == RefDirection::kPast);
+  CHECK(field.blockAt(20, 3)->ref == RefDirection::kFuture);
+}
+
+TEST_CASE("I-frames and reset fields have no vectors; capacity is fixed") {
+  MotionField field(64, 48);
+  const std::size_t capacity = field.blockCapacity();
+  field.reset(64, 48, PictureType::kI);
+  field.finalize();
+  CHECK_FALSE(field.hasVectors());
+  for (int y = 0; y < 48; y += 3)
+    for (int x = 0; x < 64; x += 3) CHECK(field.blockAt(x, y) == nullptr);
+  CHECK_THROWS_AS(field.reset(65, 48, PictureType::kP), std::length_error);
+  // Fill beyond capacity: extra blocks are refused, storage is never reallocated.
+  field.reset(64, 48, PictureType::kP);
+  const MotionBlock* storage = field.blocks().data();
+  std::size_t accepted = 0;
+  for (int i = 0; i < 10000; ++i)
+    accepted += field.addBlock((i * 4) % 64, (i * 4 / 64 * 4) % 48, 4, 4, 0.f, 0.f) ? 1 : 0;
+  CHECK(accepted == capacity);
+  CHECK(field.blockCapacity() == capacity);
+  CHECK(field.blocks().data() == storage);
+  // A block entirely outside the image is refused.
+  field.reset(64, 48, PictureType::kP);
+  CHECK_FALSE(field.addBlock(64, 0, 16, 16, 0.f, 0.f));
+}
+
+TEST_CASE("I-frame bridging carries the last P-frame's field, flagged as bridged") {
+  voca::IFrameBridge bridge(64, 64);
+  MotionField p(64, 64), i_frame(64, 64), first_i(64, 64);
+
+  first_i.reset(64, 64, PictureType::kI);
+  first_i.finalize();
+  CHECK_FALSE(bridge.apply(first_i));  // nothing to bridge from yet
+  CHECK_FALSE(first_i.hasVectors());
+
+  p.reset(64, 64, PictureType::kP);
+  p.addBlock(0, 0, 16, 16, 2.f, 3.f);
+  p.finalize();
+  p.setSourceFrame(5);
+  CHECK_FALSE(bridge.apply(p));
+  CHECK_FALSE(p.bridged());
+
+  i_frame.reset(64, 64, PictureType::kI);
+  i_frame.finalize();
+  i_frame.setSourceFrame(6);
+  CHECK(bridge.apply(i_frame));
+  CHECK(i_frame.bridged());
+  CHECK(i_frame.pictureType() == PictureType::kI);
+  CHECK(i_frame.sourceFrame() == 5);
+  REQUIRE(i_frame.blockAt(8, 8) != nullptr);
+  CHECK(i_frame.blockAt(8, 8)->dx == 2.f);
+  CHECK(i_frame.blockAt(20, 8) == nullptr);
+}
+
+TEST_CASE("median thresholding flags vectors that deviate from their neighbourhood") {
+  // A smooth field (a slow zoom: flow grows linearly from the centre) with three planted outliers.
+  const int width = 160, height = 128;
+  MotionField field(width, height);
+  field.reset(width, height, PictureType::kP);
+  std::vector<std::size_t> planted;
+  for (int y = 0; y < height; y += 16) {
+    for (int x = 0; x < width; x += 16) {
+      float dx = 0.02f * (x + 8 - width / 2), dy = 0.02f * (y + 8 - height / 2);
+      const bool outlier = (x == 32 && y == 32) || (x == 128 && y == 96) || (x == 0 && y == 0);
+      if (outlier) {
+        planted.push_back(field.blocks().size());
+        dx += 9.f;
+        dy -= 6.f;
+      }
+      field.addBlock(x, y, 16, 16, dx, dy);
+    }
+  }
+  field.finalize();
+  const int flagged = field.flagOutliers({});
+  // The zoom changes the flow by 0.32 px per block, far below the 2 px threshold, so exactly the
+  // planted blocks (9 and 6 px off) are flagged.
+  CHECK(flagged == 3);
+  for (std::size_t index : planted) CHECK(field.blocks()[index].outlier);
+}

@@ -1,0 +1,139 @@
+#pragma once
+// Codec-agnostic per-block motion of one decoded frame, with O(1) lookup of the block covering a pixel.
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace voca {
+
+// Frame-level coding type as the decoder reported it.
+enum class PictureType : std::uint8_t { kUnknown, kI, kP, kB };
+
+// Which reference a block's vector points into.
+enum class RefDirection : std::uint8_t { kPast, kFuture };
+
+const char* pictureTypeName(PictureType type);
+
+// One inter-predicted block. (x, y, w, h) is its rectangle in the current frame (pixels, clipped to
+// the image); (dx, dy) is the forward displacement in pixels: a point of the reference frame at p
+// is at p + (dx, dy) in this frame when ref is kPast (the codec vector negated, DESIGN.md section 4).
+// For kFuture the vector is stored the same way relative to the future reference: the point of the
+// future reference at p is at p + (dx, dy) here.
+struct MotionBlock {
+  std::int16_t x = 0, y = 0, w = 0, h = 0;
+  float dx = 0.f, dy = 0.f;
+  RefDirection ref = RefDirection::kPast;
+  bool outlier = false;  // set by MotionField::flagOutliers()
+
+  float centreX() const { return static_cast<float>(x) + 0.5f * static_cast<float>(w); }
+  float centreY() const { return static_cast<float>(y) + 0.5f * static_cast<float>(h); }
+};
+
+// Median thresholding of vectors (the paper's Fig. 3): a block is flagged when its displacement
+// differs from the component-wise median of the blocks around it by more than
+// max(abs_threshold_px, rel_threshold * |median|). Too few neighbours -> the global median is used.
+struct OutlierParams {
+  int radius_px = 24;      // neighbourhood: blocks whose centre lies within this box radius
+  int min_neighbours = 4;  // below this the global median of the frame is the reference
+  float abs_threshold_px = 2.f;
+  float rel_threshold = 0.5f;
+};
+
+// The motion field of one frame. Capacity (max image size) is fixed at construction; reset(),
+// addBlock(), finalize(), copyFrom() and flagOutliers() never allocate afterwards. Lookups go
+// through a grid of kCellPx x kCellPx cells holding the index of the block covering each cell
+// (past references win over future ones), so blockAt() is O(1).
+class MotionField {
+ public:
+  static constexpr int kCellPx = 4;
+  static constexpr std::int32_t kNoBlock = -1;
+
+  MotionField() = default;
+  MotionField(int max_width, int max_height);
+
+  int maxWidth() const { return max_width_; }
+  int maxHeight() const { return max_height_; }
+  std::size_t blockCapacity() const { return blocks_.capacity(); }
+
+  // Start a new frame: no blocks, every pixel "no vector". Throws std::length_error when the size
+  // exceeds the capacity.
+  void reset(int width, int height, PictureType type);
+
+  // Add a block given as a rectangle in the current frame (may reach outside the image: it is clipped)
+  // and its forward displacement. Returns false (and ignores the block) when it lies entirely
+  // outside the image or the block capacity is used up.
+  bool addBlock(int x, int y, int w, int h, float dx, float dy, RefDirection ref = RefDirection::kPast);
+
+  // Rasterise the blocks into the lookup grid. Call once after the last addBlock() of a frame.
+  void finalize();
+
+  // The block covering pixel (x, y), or nullptr for "no vector" (intra block, I-frame, uncovered
+  // or outside the image). O(1).
+  const MotionBlock* blockAt(int x, int y) const {
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return nullptr;
+    const std::int32_t index = grid_[static_cast<std::size_t>(y / kCellPx) * grid_stride_ + x / kCellPx];
+    return index == kNoBlock ? nullptr : &blocks_[static_cast<std::size_t>(index)];
+  }
+  // Forward flow at a sub-pixel position (the block containing it), or nullopt for "no vector".
+  std::optional<Eigen::Vector2f> forwardFlowAt(float x, float y) const;
+
+  std::span<const MotionBlock> blocks() const { return blocks_; }
+  std::span<MotionBlock> blocks() { return blocks_; }
+  bool hasVectors() const { return !blocks_.empty(); }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  PictureType pictureType() const { return type_; }
+
+  // True when the vectors were carried over from an earlier P-frame (I-frame bridging); the
+  // picture type stays that of this frame.
+  bool bridged() const { return bridged_; }
+  // Index (within the stream) of the frame the vectors were decoded from; equals this frame's
+  // source_frame when not bridged. Set by the decoder.
+  std::int64_t sourceFrame() const { return source_frame_; }
+  void setSourceFrame(std::int64_t frame) { source_frame_ = frame; }
+
+  // Copy another field's blocks, grid, size and flags into this one without allocating (capacity
+  // must suffice: throws std::length_error otherwise).
+  void copyFrom(const MotionField& other);
+  // Replace this frame's (absent) vectors with those of an earlier field, keeping this frame's
+  // picture type and marking the result as bridged.
+  void bridgeFrom(const MotionField& earlier);
+
+  // Set MotionBlock::outlier by median thresholding; returns the number of flagged blocks.
+  int flagOutliers(const OutlierParams& params = {});
+
+ private:
+  int max_width_ = 0, max_height_ = 0;
+  int width_ = 0, height_ = 0;
+  std::size_t grid_stride_ = 0;
+  PictureType type_ = PictureType::kUnknown;
+  bool bridged_ = false;
+  std::int64_t source_frame_ = -1;
+  std::vector<MotionBlock> blocks_;
+  std::vector<std::int32_t> grid_;
+  // Scratch for flagOutliers(), sized at construction.
+  std::vector<float> scratch_x_, scratch_y_;
+  std::vector<std::uint32_t> visit_stamp_;
+  std::uint32_t stamp_ = 0;
+};
+
+// Carries motion over I-frames (paper section "Bridging I-frames"): feed every frame's field in
+// stream order; a P-frame's field is remembered, and a field without vectors (I-frame) is replaced
+// by the remembered one, flagged as bridged. No allocation after construction.
+class IFrameBridge {
+ public:
+  IFrameBridge(int max_width, int max_height) : last_(max_width, max_height) {}
+  // Returns true when `field` was bridged.
+  bool apply(MotionField& field);
+  void clear() { have_last_ = false; }
+
+ private:
+  MotionField last_;
+  bool have_last_ = false;
+};
+
+}  // namespace voca
