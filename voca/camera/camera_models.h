@@ -1,0 +1,676 @@
+#pragma once
+// Camera projection models with analytic Jacobians: pinhole, pinhole-radtan8, kb4, ds and eucm.
+//
+// Parameter orders and names follow Basalt's calibration files. Formulas for kb4, ds and eucm
+// (and their valid regions) follow Usenko, Demmel, Cremers, "The Double Sphere Camera Model",
+// 3DV 2018; pinhole-radtan8 is OpenCV's rational radial + tangential model.
+// Every model is templated on the scalar: the frontend projects in float, the backend in double.
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace voca {
+
+namespace camera_detail {
+
+// Unit vector along q and the Jacobian of q -> q/|q|, which is (I - b b^T)/|q|.
+template <typename Scalar>
+inline Eigen::Matrix<Scalar, 3, 1> normalizeWithJacobian(const Eigen::Matrix<Scalar, 3, 1>& q,
+                                                         Eigen::Matrix<Scalar, 3, 3>* d_b_d_q) {
+  const Scalar norm = q.norm();
+  const Eigen::Matrix<Scalar, 3, 1> b = q / norm;
+  if (d_b_d_q) *d_b_d_q = (Eigen::Matrix<Scalar, 3, 3>::Identity() - b * b.transpose()) / norm;
+  return b;
+}
+
+// Inverse of a 2x2 matrix; false when it is singular (kept local to avoid pulling in Eigen/LU).
+template <typename Scalar>
+inline bool invert2x2(const Eigen::Matrix<Scalar, 2, 2>& a, Eigen::Matrix<Scalar, 2, 2>& inverse) {
+  const Scalar det = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+  if (!(std::abs(det) > std::numeric_limits<Scalar>::min())) return false;
+  inverse << a(1, 1) / det, -a(0, 1) / det, -a(1, 0) / det, a(0, 0) / det;
+  return true;
+}
+
+// Newton-type unprojection stops after this many iterations; realistic calibrations converge in
+// fewer than 6 (quadratic convergence from the distorted point as the first guess).
+inline constexpr int kMaxUnprojectIterations = 20;
+
+// Residual accepted as converged: a few rounding errors of evaluating the model at the solution.
+template <typename Scalar>
+inline Scalar convergenceTolerance(Scalar magnitude) {
+  return Scalar(32) * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + magnitude);
+}
+
+// Largest x in (0, x_end] such that ok(t) holds for every t in (0, x]. Scans with a fixed step and
+// then bisects the first failing interval. Used once at construction to find where a distortion
+// function stops being monotonic.
+template <typename Predicate>
+inline double firstFailure(Predicate ok, double x_end, int steps) {
+  const double step = x_end / steps;
+  double good = 0.0;
+  for (int i = 1; i <= steps; ++i) {
+    const double x = step * i;
+    if (!ok(x)) {
+      double bad = x;
+      for (int j = 0; j < 60; ++j) {
+        const double mid = 0.5 * (good + bad);
+        (ok(mid) ? good : bad) = mid;
+      }
+      return good;
+    }
+    good = x;
+  }
+  return x_end;
+}
+
+}  // namespace camera_detail
+
+// Ideal pinhole: u = fx x/z + cx, v = fy y/z + cy. Parameters fx fy cx cy.
+template <typename Scalar>
+class PinholeCamera {
+ public:
+  static constexpr int kNumParams = 4;
+  static constexpr const char* kName = "pinhole";
+  static constexpr std::array<const char*, kNumParams> kParamNames{"fx", "fy", "cx", "cy"};
+  using Vec2 = Eigen::Matrix<Scalar, 2, 1>;
+  using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Mat23 = Eigen::Matrix<Scalar, 2, 3>;
+  using Mat32 = Eigen::Matrix<Scalar, 3, 2>;
+  using Params = Eigen::Matrix<Scalar, kNumParams, 1>;
+  using ParamJacobian = Eigen::Matrix<Scalar, 2, kNumParams>;
+
+  explicit PinholeCamera(const Params& params) : params_(params) {}
+  const Params& params() const { return params_; }
+  template <typename Other>
+  PinholeCamera<Other> cast() const {
+    return PinholeCamera<Other>(params_.template cast<Other>());
+  }
+
+  // False for points on or behind the image plane (z <= 0).
+  bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
+    const Scalar x = p_cam[0], y = p_cam[1], z = p_cam[2];
+    if (!(z > Scalar(0))) return false;
+    const Scalar inv_z = Scalar(1) / z;
+    const Scalar mx = x * inv_z, my = y * inv_z;
+    uv << fx * mx + cx, fy * my + cy;
+    if (d_uv_d_p) {
+      *d_uv_d_p << fx * inv_z, Scalar(0), -fx * mx * inv_z,  //
+          Scalar(0), fy * inv_z, -fy * my * inv_z;
+    }
+    if (d_uv_d_params) {
+      *d_uv_d_params << mx, Scalar(0), Scalar(1), Scalar(0),  //
+          Scalar(0), my, Scalar(0), Scalar(1);
+    }
+    return true;
+  }
+
+  // Every pixel has a bearing.
+  bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
+    const Vec3 m((uv[0] - cx) / fx, (uv[1] - cy) / fy, Scalar(1));
+    Eigen::Matrix<Scalar, 3, 3> d_b_d_m;
+    bearing = camera_detail::normalizeWithJacobian<Scalar>(m, d_bearing_d_uv ? &d_b_d_m : nullptr);
+    if (d_bearing_d_uv) {
+      d_bearing_d_uv->col(0) = d_b_d_m.col(0) / fx;
+      d_bearing_d_uv->col(1) = d_b_d_m.col(1) / fy;
+    }
+    return true;
+  }
+
+ private:
+  Params params_;
+};
+
+// Pinhole with OpenCV's rational radial (k1..k6) and tangential (p1, p2) distortion, Basalt's
+// "pinhole-radtan8". Kalibr's "radtan" is the case k3 = k4 = k5 = k6 = 0.
+// Parameters fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6.
+template <typename Scalar>
+class PinholeRadtan8Camera {
+ public:
+  static constexpr int kNumParams = 12;
+  static constexpr const char* kName = "pinhole-radtan8";
+  static constexpr std::array<const char*, kNumParams> kParamNames{"fx", "fy", "cx", "cy", "k1", "k2",
+                                                                   "p1", "p2", "k3", "k4", "k5", "k6"};
+  using Vec2 = Eigen::Matrix<Scalar, 2, 1>;
+  using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Mat22 = Eigen::Matrix<Scalar, 2, 2>;
+  using Mat23 = Eigen::Matrix<Scalar, 2, 3>;
+  using Mat32 = Eigen::Matrix<Scalar, 3, 2>;
+  using Params = Eigen::Matrix<Scalar, kNumParams, 1>;
+  using ParamJacobian = Eigen::Matrix<Scalar, 2, kNumParams>;
+
+  // Normalised radius (tan of the angle off the axis) searched for the end of the monotonic
+  // region; beyond ~87 degrees a pinhole image is useless anyway.
+  static constexpr double kMaxSearchedRadius = 20.0;
+
+  explicit PinholeRadtan8Camera(const Params& params) : params_(params) {
+    max_radius_ = Scalar(computeMaxRadius(params_.template cast<double>()));
+  }
+  const Params& params() const { return params_; }
+  template <typename Other>
+  PinholeRadtan8Camera<Other> cast() const {
+    return PinholeRadtan8Camera<Other>(params_.template cast<Other>());
+  }
+  // Normalised radius r = |(x/z, y/z)| where r * radial(r) stops increasing (or the rational
+  // denominator reaches zero); points beyond it would fold back into the image.
+  Scalar maxRadius() const { return max_radius_; }
+
+  // False for z <= 0 and for points whose normalised radius exceeds maxRadius().
+  bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
+    const Scalar x = p_cam[0], y = p_cam[1], z = p_cam[2];
+    if (!(z > Scalar(0))) return false;
+    const Scalar inv_z = Scalar(1) / z;
+    const Vec2 m(x * inv_z, y * inv_z);
+    if (!(m.squaredNorm() <= max_radius_ * max_radius_)) return false;
+    Vec2 distorted;
+    Mat22 d_dist_d_m;
+    distort(m, distorted, d_uv_d_p ? &d_dist_d_m : nullptr, d_uv_d_params);
+    const Scalar fx = params_[0], fy = params_[1];
+    uv << fx * distorted[0] + params_[2], fy * distorted[1] + params_[3];
+    if (d_uv_d_p) {
+      Mat23 d_m_d_p;
+      d_m_d_p << inv_z, Scalar(0), -m[0] * inv_z,  //
+          Scalar(0), inv_z, -m[1] * inv_z;
+      *d_uv_d_p = d_dist_d_m * d_m_d_p;
+      d_uv_d_p->row(0) *= fx;
+      d_uv_d_p->row(1) *= fy;
+    }
+    return true;
+  }
+
+  // Inverts the distortion with Newton steps (halved when they do not reduce the residual).
+  // False when the iteration does not converge or lands beyond maxRadius().
+  bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1];
+    const Vec2 target((uv[0] - params_[2]) / fx, (uv[1] - params_[3]) / fy);
+    const Scalar tolerance = camera_detail::convergenceTolerance<Scalar>(target.norm());
+    Vec2 m = target;
+    Vec2 distorted;
+    Mat22 jacobian;
+    distort(m, distorted, &jacobian, nullptr);
+    Vec2 residual = distorted - target;
+    bool converged = false;
+    for (int iteration = 0; iteration < camera_detail::kMaxUnprojectIterations; ++iteration) {
+      if (residual.norm() <= tolerance) {
+        converged = true;
+        break;
+      }
+      Mat22 inverse;
+      if (!camera_detail::invert2x2<Scalar>(jacobian, inverse)) return false;
+      Vec2 step = -inverse * residual;
+      // Backtracking keeps a far-off first guess from jumping past the monotonic region.
+      for (int halving = 0; halving < 10; ++halving) {
+        const Vec2 candidate = m + step;
+        Vec2 candidate_distorted;
+        Mat22 candidate_jacobian;
+        distort(candidate, candidate_distorted, &candidate_jacobian, nullptr);
+        const Vec2 candidate_residual = candidate_distorted - target;
+        if (candidate_residual.norm() < residual.norm() || halving == 9) {
+          m = candidate;
+          jacobian = candidate_jacobian;
+          residual = candidate_residual;
+          break;
+        }
+        step *= Scalar(0.5);
+      }
+    }
+    if (!converged && residual.norm() <= tolerance) converged = true;
+    if (!converged || !(m.squaredNorm() <= max_radius_ * max_radius_)) return false;
+
+    const Vec3 ray(m[0], m[1], Scalar(1));
+    Eigen::Matrix<Scalar, 3, 3> d_b_d_ray;
+    bearing = camera_detail::normalizeWithJacobian<Scalar>(ray, d_bearing_d_uv ? &d_b_d_ray : nullptr);
+    if (d_bearing_d_uv) {
+      // Implicit function theorem: d m / d target = (d distorted / d m)^-1.
+      Mat22 d_m_d_target;
+      if (!camera_detail::invert2x2<Scalar>(jacobian, d_m_d_target)) return false;
+      d_m_d_target.col(0) /= fx;
+      d_m_d_target.col(1) /= fy;
+      *d_bearing_d_uv = d_b_d_ray.template leftCols<2>() * d_m_d_target;
+    }
+    return true;
+  }
+
+ private:
+  // Distorted normalised coordinates of m = (x/z, y/z), the Jacobian w.r.t. m, and (when asked) the
+  // full pixel Jacobian w.r.t. the parameters.
+  void distort(const Vec2& m, Vec2& distorted, Mat22* d_dist_d_m, ParamJacobian* d_uv_d_params) const {
+    const Scalar k1 = params_[4], k2 = params_[5], p1 = params_[6], p2 = params_[7];
+    const Scalar k3 = params_[8], k4 = params_[9], k5 = params_[10], k6 = params_[11];
+    const Scalar mx = m[0], my = m[1];
+    const Scalar r2 = mx * mx + my * my, r4 = r2 * r2, r6 = r4 * r2;
+    const Scalar num = Scalar(1) + k1 * r2 + k2 * r4 + k3 * r6;
+    const Scalar den = Scalar(1) + k4 * r2 + k5 * r4 + k6 * r6;
+    const Scalar inv_den = Scalar(1) / den;
+    const Scalar radial = num * inv_den;
+    const Scalar mxy = mx * my;
+    distorted << mx * radial + Scalar(2) * p1 * mxy + p2 * (r2 + Scalar(2) * mx * mx),
+        my * radial + Scalar(2) * p2 * mxy + p1 * (r2 + Scalar(2) * my * my);
+    if (d_dist_d_m) {
+      const Scalar d_num = k1 + Scalar(2) * k2 * r2 + Scalar(3) * k3 * r4;
+      const Scalar d_den = k4 + Scalar(2) * k5 * r2 + Scalar(3) * k6 * r4;
+      const Scalar d_radial_d_r2 = (d_num * den - num * d_den) * inv_den * inv_den;
+      const Scalar two_r = Scalar(2) * d_radial_d_r2;
+      (*d_dist_d_m)(0, 0) = radial + two_r * mx * mx + Scalar(2) * p1 * my + Scalar(6) * p2 * mx;
+      (*d_dist_d_m)(0, 1) = two_r * mxy + Scalar(2) * p1 * mx + Scalar(2) * p2 * my;
+      (*d_dist_d_m)(1, 0) = two_r * mxy + Scalar(2) * p2 * my + Scalar(2) * p1 * mx;
+      (*d_dist_d_m)(1, 1) = radial + two_r * my * my + Scalar(2) * p2 * mx + Scalar(6) * p1 * my;
+    }
+    if (d_uv_d_params) {
+      const Scalar fx = params_[0], fy = params_[1];
+      ParamJacobian& j = *d_uv_d_params;
+      j.setZero();
+      j(0, 0) = distorted[0];
+      j(1, 1) = distorted[1];
+      j(0, 2) = Scalar(1);
+      j(1, 3) = Scalar(1);
+      const Scalar num_scale = inv_den;
+      const Scalar den_scale = -radial * inv_den;
+      const std::array<Scalar, 3> powers{r2, r4, r6};
+      const std::array<int, 3> num_index{4, 5, 8};    // k1 k2 k3
+      const std::array<int, 3> den_index{9, 10, 11};  // k4 k5 k6
+      for (int i = 0; i < 3; ++i) {
+        j(0, num_index[i]) = fx * mx * powers[i] * num_scale;
+        j(1, num_index[i]) = fy * my * powers[i] * num_scale;
+        j(0, den_index[i]) = fx * mx * powers[i] * den_scale;
+        j(1, den_index[i]) = fy * my * powers[i] * den_scale;
+      }
+      j(0, 6) = fx * Scalar(2) * mxy;
+      j(1, 6) = fy * (r2 + Scalar(2) * my * my);
+      j(0, 7) = fx * (r2 + Scalar(2) * mx * mx);
+      j(1, 7) = fy * Scalar(2) * mxy;
+    }
+  }
+
+  static double computeMaxRadius(const Eigen::Matrix<double, kNumParams, 1>& p) {
+    const double k1 = p[4], k2 = p[5], k3 = p[8], k4 = p[9], k5 = p[10], k6 = p[11];
+    // d/dr [r * radial(r^2)] = radial + 2 r^2 radial'(r^2); the denominator must stay positive.
+    const auto monotonic = [&](double r) {
+      const double r2 = r * r, r4 = r2 * r2, r6 = r4 * r2;
+      const double num = 1.0 + k1 * r2 + k2 * r4 + k3 * r6;
+      const double den = 1.0 + k4 * r2 + k5 * r4 + k6 * r6;
+      if (!(den > 0.0)) return false;
+      const double d_num = k1 + 2.0 * k2 * r2 + 3.0 * k3 * r4;
+      const double d_den = k4 + 2.0 * k5 * r2 + 3.0 * k6 * r4;
+      return num / den + 2.0 * r2 * (d_num * den - num * d_den) / (den * den) > 0.0;
+    };
+    return camera_detail::firstFailure(monotonic, kMaxSearchedRadius, 4000);
+  }
+
+  Params params_;
+  Scalar max_radius_;
+};
+
+// Kannala-Brandt fisheye with four coefficients (Kalibr "equidistant"):
+// u = fx d(theta) x/r + cx with r = |(x, y)|, theta = atan2(r, z),
+// d(theta) = theta + k1 theta^3 + k2 theta^5 + k3 theta^7 + k4 theta^9. Parameters fx fy cx cy k1 k2 k3 k4.
+template <typename Scalar>
+class KannalaBrandt4Camera {
+ public:
+  static constexpr int kNumParams = 8;
+  static constexpr const char* kName = "kb4";
+  static constexpr std::array<const char*, kNumParams> kParamNames{"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"};
+  using Vec2 = Eigen::Matrix<Scalar, 2, 1>;
+  using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Mat23 = Eigen::Matrix<Scalar, 2, 3>;
+  using Mat32 = Eigen::Matrix<Scalar, 3, 2>;
+  using Params = Eigen::Matrix<Scalar, kNumParams, 1>;
+  using ParamJacobian = Eigen::Matrix<Scalar, 2, kNumParams>;
+
+  explicit KannalaBrandt4Camera(const Params& params) : params_(params) {
+    const Eigen::Matrix<double, kNumParams, 1> p = params_.template cast<double>();
+    const auto monotonic = [&](double theta) {
+      const double t2 = theta * theta;
+      return 1.0 + t2 * (3.0 * p[4] + t2 * (5.0 * p[5] + t2 * (7.0 * p[6] + t2 * 9.0 * p[7]))) > 0.0;
+    };
+    const double max_theta = camera_detail::firstFailure(monotonic, std::numbers::pi, 3200);
+    max_theta_ = Scalar(max_theta);
+    max_distorted_ = distortion(max_theta_);
+  }
+  const Params& params() const { return params_; }
+  template <typename Other>
+  KannalaBrandt4Camera<Other> cast() const {
+    return KannalaBrandt4Camera<Other>(params_.template cast<Other>());
+  }
+  // Angle off the optical axis (radians, at most pi) up to which d(theta) increases; points at
+  // larger angles would fold back into the image.
+  Scalar maxTheta() const { return max_theta_; }
+
+  // Works behind the camera (z <= 0) as long as the angle stays within maxTheta().
+  bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
+    const Scalar x = p_cam[0], y = p_cam[1], z = p_cam[2];
+    const Scalar r2 = x * x + y * y;
+    const Scalar r = std::sqrt(r2);
+    // Near the axis d(theta)/r = 1/z up to O((r/z)^2), which is below rounding here.
+    if (r < std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::abs(z)) {
+      if (!(z > Scalar(0))) return false;
+      typename PinholeCamera<Scalar>::ParamJacobian d_uv_d_pinhole;
+      PinholeCamera<Scalar>(params_.template head<4>()).project(p_cam, uv, d_uv_d_p, &d_uv_d_pinhole);
+      if (d_uv_d_params) {
+        // On the axis the coefficients k1..k4 have no first-order effect.
+        d_uv_d_params->setZero();
+        d_uv_d_params->template leftCols<4>() = d_uv_d_pinhole;
+      }
+      return true;
+    }
+    const Scalar theta = std::atan2(r, z);
+    if (!(theta <= max_theta_)) return false;
+    const Scalar t2 = theta * theta;
+    const Scalar d = distortion(theta);
+    const Scalar inv_r = Scalar(1) / r;
+    const Scalar s = d * inv_r;
+    uv << fx * s * x + cx, fy * s * y + cy;
+    if (d_uv_d_p) {
+      const Scalar d_prime = distortionDerivative(theta);
+      const Scalar rho2 = r2 + z * z;
+      const Scalar d_theta_d_r = z / rho2;
+      const Scalar d_theta_d_z = -r / rho2;
+      // s = d(theta(r, z)) / r: ds/dr and ds/dz, then r = |(x, y)| gives dr/dx = x/r.
+      const Scalar d_s_d_r = (d_prime * d_theta_d_r - s) * inv_r;
+      const Scalar d_s_d_z = d_prime * d_theta_d_z * inv_r;
+      const Vec3 d_s_d_p(d_s_d_r * x * inv_r, d_s_d_r * y * inv_r, d_s_d_z);
+      d_uv_d_p->row(0) = fx * x * d_s_d_p.transpose();
+      d_uv_d_p->row(1) = fy * y * d_s_d_p.transpose();
+      (*d_uv_d_p)(0, 0) += fx * s;
+      (*d_uv_d_p)(1, 1) += fy * s;
+    }
+    if (d_uv_d_params) {
+      ParamJacobian& j = *d_uv_d_params;
+      j.setZero();
+      j(0, 0) = s * x;
+      j(1, 1) = s * y;
+      j(0, 2) = Scalar(1);
+      j(1, 3) = Scalar(1);
+      Scalar theta_power = theta * t2;
+      for (int i = 4; i < 8; ++i) {
+        j(0, i) = fx * x * inv_r * theta_power;
+        j(1, i) = fy * y * inv_r * theta_power;
+        theta_power *= t2;
+      }
+    }
+    return true;
+  }
+
+  // Solves d(theta) = |m| for theta with Newton's method on [0, maxTheta()]. False for pixels
+  // beyond the image of maxTheta() or when the iteration does not converge.
+  bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1];
+    const Scalar mx = (uv[0] - params_[2]) / fx, my = (uv[1] - params_[3]) / fy;
+    const Scalar ru = std::sqrt(mx * mx + my * my);
+    if (ru < std::sqrt(std::numeric_limits<Scalar>::epsilon())) {
+      // d(theta) = theta + O(theta^3): the pinhole bearing is exact to rounding here.
+      return PinholeCamera<Scalar>(params_.template head<4>()).unproject(uv, bearing, d_bearing_d_uv);
+    }
+    const Scalar tolerance = camera_detail::convergenceTolerance<Scalar>(ru);
+    if (!(ru <= max_distorted_ + tolerance)) return false;
+    Scalar theta = std::min(ru, max_theta_);
+    Scalar d_prime = Scalar(1);
+    bool converged = false;
+    for (int iteration = 0; iteration <= camera_detail::kMaxUnprojectIterations; ++iteration) {
+      const Scalar residual = distortion(theta) - ru;
+      d_prime = distortionDerivative(theta);
+      if (std::abs(residual) <= tolerance) {
+        converged = true;
+        break;
+      }
+      if (iteration == camera_detail::kMaxUnprojectIterations || !(d_prime > Scalar(0))) break;
+      theta = std::clamp(theta - residual / d_prime, Scalar(0), max_theta_);
+    }
+    if (!converged) return false;
+    const Scalar sin_theta = std::sin(theta), cos_theta = std::cos(theta);
+    const Scalar g = sin_theta / ru;
+    bearing << g * mx, g * my, cos_theta;
+    if (d_bearing_d_uv) {
+      // theta(ru) has derivative 1/d'(theta); g = sin(theta)/ru.
+      const Scalar d_theta_d_ru = Scalar(1) / d_prime;
+      const Scalar d_g_d_ru = (cos_theta * d_theta_d_ru * ru - sin_theta) / (ru * ru);
+      const Eigen::Matrix<Scalar, 1, 2> d_ru_d_m(mx / ru, my / ru);
+      Mat32 d_b_d_m;
+      d_b_d_m.template topRows<2>() = Vec2(mx, my) * (d_g_d_ru * d_ru_d_m);
+      d_b_d_m(0, 0) += g;
+      d_b_d_m(1, 1) += g;
+      d_b_d_m.row(2) = -sin_theta * d_theta_d_ru * d_ru_d_m;
+      d_b_d_m.col(0) /= fx;
+      d_b_d_m.col(1) /= fy;
+      *d_bearing_d_uv = d_b_d_m;
+    }
+    return true;
+  }
+
+ private:
+  Scalar distortion(Scalar theta) const {
+    const Scalar t2 = theta * theta;
+    return theta * (Scalar(1) + t2 * (params_[4] + t2 * (params_[5] + t2 * (params_[6] + t2 * params_[7]))));
+  }
+  Scalar distortionDerivative(Scalar theta) const {
+    const Scalar t2 = theta * theta;
+    return Scalar(1) +
+           t2 * (Scalar(3) * params_[4] +
+                 t2 * (Scalar(5) * params_[5] + t2 * (Scalar(7) * params_[6] + t2 * Scalar(9) * params_[7])));
+  }
+
+  Params params_;
+  Scalar max_theta_;
+  Scalar max_distorted_;
+};
+
+// Double sphere model. d1 = |p|, d2 = |(x, y, xi d1 + z)|,
+// u = fx x / (alpha d2 + (1 - alpha)(xi d1 + z)) + cx. Parameters fx fy cx cy xi alpha.
+template <typename Scalar>
+class DoubleSphereCamera {
+ public:
+  static constexpr int kNumParams = 6;
+  static constexpr const char* kName = "ds";
+  static constexpr std::array<const char*, kNumParams> kParamNames{"fx", "fy", "cx", "cy", "xi", "alpha"};
+  using Vec2 = Eigen::Matrix<Scalar, 2, 1>;
+  using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Mat23 = Eigen::Matrix<Scalar, 2, 3>;
+  using Mat32 = Eigen::Matrix<Scalar, 3, 2>;
+  using Params = Eigen::Matrix<Scalar, kNumParams, 1>;
+  using ParamJacobian = Eigen::Matrix<Scalar, 2, kNumParams>;
+
+  explicit DoubleSphereCamera(const Params& params) : params_(params) {
+    const Scalar xi = params_[4], alpha = params_[5];
+    const Scalar w1 = alpha <= Scalar(0.5) ? alpha / (Scalar(1) - alpha) : (Scalar(1) - alpha) / alpha;
+    const Scalar w2_den = Scalar(2) * w1 * xi + xi * xi + Scalar(1);
+    // w2_den = (w1 + xi)^2 + 1 - w1^2 >= 0 since w1 <= 1; it is zero only for alpha = 0.5, xi = -1.
+    w2_ = w2_den > Scalar(0) ? (w1 + xi) / std::sqrt(w2_den) : Scalar(1);
+  }
+  const Params& params() const { return params_; }
+  template <typename Other>
+  DoubleSphereCamera<Other> cast() const {
+    return DoubleSphereCamera<Other>(params_.template cast<Other>());
+  }
+
+  // False outside the valid region z > -w2 d1 (paper, eq. for Omega of the double sphere model).
+  bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
+    const Scalar xi = params_[4], alpha = params_[5];
+    const Scalar x = p_cam[0], y = p_cam[1], z = p_cam[2];
+    const Scalar r2 = x * x + y * y;
+    const Scalar d1 = std::sqrt(r2 + z * z);
+    if (!(z > -w2_ * d1)) return false;
+    const Scalar k = xi * d1 + z;
+    const Scalar d2 = std::sqrt(r2 + k * k);
+    const Scalar den = alpha * d2 + (Scalar(1) - alpha) * k;
+    if (!(den > Scalar(0))) return false;
+    const Scalar inv_den = Scalar(1) / den;
+    const Scalar mx = x * inv_den, my = y * inv_den;
+    uv << fx * mx + cx, fy * my + cy;
+    if (d_uv_d_p) {
+      const Vec3 d_d1_d_p = p_cam / d1;
+      Vec3 d_k_d_p = xi * d_d1_d_p;
+      d_k_d_p[2] += Scalar(1);
+      const Vec3 d_d2_d_p = (Vec3(x, y, Scalar(0)) + k * d_k_d_p) / d2;
+      const Vec3 d_den_d_p = alpha * d_d2_d_p + (Scalar(1) - alpha) * d_k_d_p;
+      d_uv_d_p->row(0) = -fx * mx * inv_den * d_den_d_p.transpose();
+      d_uv_d_p->row(1) = -fy * my * inv_den * d_den_d_p.transpose();
+      (*d_uv_d_p)(0, 0) += fx * inv_den;
+      (*d_uv_d_p)(1, 1) += fy * inv_den;
+    }
+    if (d_uv_d_params) {
+      ParamJacobian& j = *d_uv_d_params;
+      j.setZero();
+      j(0, 0) = mx;
+      j(1, 1) = my;
+      j(0, 2) = Scalar(1);
+      j(1, 3) = Scalar(1);
+      const Scalar d_den_d_xi = alpha * k * d1 / d2 + (Scalar(1) - alpha) * d1;
+      const Scalar d_den_d_alpha = d2 - k;
+      j(0, 4) = -fx * mx * inv_den * d_den_d_xi;
+      j(1, 4) = -fy * my * inv_den * d_den_d_xi;
+      j(0, 5) = -fx * mx * inv_den * d_den_d_alpha;
+      j(1, 5) = -fy * my * inv_den * d_den_d_alpha;
+    }
+    return true;
+  }
+
+  // Closed form; false outside the unprojection domain r^2 < 1/(2 alpha - 1) (alpha > 0.5).
+  bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1];
+    const Scalar xi = params_[4], alpha = params_[5];
+    const Scalar mx = (uv[0] - params_[2]) / fx, my = (uv[1] - params_[3]) / fy;
+    const Scalar r2 = mx * mx + my * my;
+    const Scalar s2 = Scalar(1) - (Scalar(2) * alpha - Scalar(1)) * r2;
+    if (!(s2 > Scalar(0))) return false;
+    const Scalar s = std::sqrt(s2);
+    const Scalar q = alpha * s + Scalar(1) - alpha;
+    const Scalar n = Scalar(1) - alpha * alpha * r2;
+    const Scalar mz = n / q;
+    const Scalar t2 = mz * mz + (Scalar(1) - xi * xi) * r2;
+    if (!(t2 >= Scalar(0))) return false;
+    const Scalar t = std::sqrt(t2);
+    const Scalar num = mz * xi + t;
+    const Scalar dd = mz * mz + r2;
+    const Scalar f = num / dd;
+    bearing << f * mx, f * my, f * mz - xi;
+    if (d_bearing_d_uv) {
+      if (!(t > Scalar(0))) return false;
+      const Scalar d_q_d_r2 = -alpha * (Scalar(2) * alpha - Scalar(1)) / (Scalar(2) * s);
+      const Scalar d_mz_d_r2 = (-alpha * alpha * q - n * d_q_d_r2) / (q * q);
+      const Scalar d_t_d_r2 = (Scalar(2) * mz * d_mz_d_r2 + Scalar(1) - xi * xi) / (Scalar(2) * t);
+      const Scalar d_num_d_r2 = xi * d_mz_d_r2 + d_t_d_r2;
+      const Scalar d_dd_d_r2 = Scalar(2) * mz * d_mz_d_r2 + Scalar(1);
+      const Scalar d_f_d_r2 = (d_num_d_r2 * dd - num * d_dd_d_r2) / (dd * dd);
+      const Eigen::Matrix<Scalar, 1, 2> d_r2_d_m(Scalar(2) * mx, Scalar(2) * my);
+      Mat32 d_b_d_m = Vec3(mx, my, mz) * (d_f_d_r2 * d_r2_d_m);
+      d_b_d_m(0, 0) += f;
+      d_b_d_m(1, 1) += f;
+      d_b_d_m.row(2) += f * d_mz_d_r2 * d_r2_d_m;
+      d_b_d_m.col(0) /= fx;
+      d_b_d_m.col(1) /= fy;
+      *d_bearing_d_uv = d_b_d_m;
+    }
+    return true;
+  }
+
+ private:
+  Params params_;
+  Scalar w2_;
+};
+
+// Extended unified camera model. d = sqrt(beta (x^2 + y^2) + z^2),
+// u = fx x / (alpha d + (1 - alpha) z) + cx. Parameters fx fy cx cy alpha beta.
+template <typename Scalar>
+class ExtendedUnifiedCamera {
+ public:
+  static constexpr int kNumParams = 6;
+  static constexpr const char* kName = "eucm";
+  static constexpr std::array<const char*, kNumParams> kParamNames{"fx", "fy", "cx", "cy", "alpha", "beta"};
+  using Vec2 = Eigen::Matrix<Scalar, 2, 1>;
+  using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Mat23 = Eigen::Matrix<Scalar, 2, 3>;
+  using Mat32 = Eigen::Matrix<Scalar, 3, 2>;
+  using Params = Eigen::Matrix<Scalar, kNumParams, 1>;
+  using ParamJacobian = Eigen::Matrix<Scalar, 2, kNumParams>;
+
+  explicit ExtendedUnifiedCamera(const Params& params) : params_(params) {
+    const Scalar alpha = params_[4];
+    w_ = alpha <= Scalar(0.5) ? alpha / (Scalar(1) - alpha) : (Scalar(1) - alpha) / alpha;
+  }
+  const Params& params() const { return params_; }
+  template <typename Other>
+  ExtendedUnifiedCamera<Other> cast() const {
+    return ExtendedUnifiedCamera<Other>(params_.template cast<Other>());
+  }
+
+  // False outside the valid region z > -w d, w = alpha/(1-alpha) for alpha <= 0.5 (the
+  // denominator stays positive), (1-alpha)/alpha above (the projection stays injective).
+  bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
+    const Scalar alpha = params_[4], beta = params_[5];
+    const Scalar x = p_cam[0], y = p_cam[1], z = p_cam[2];
+    const Scalar r2 = x * x + y * y;
+    const Scalar d = std::sqrt(beta * r2 + z * z);
+    if (!(z > -w_ * d)) return false;
+    const Scalar den = alpha * d + (Scalar(1) - alpha) * z;
+    if (!(den > Scalar(0))) return false;
+    const Scalar inv_den = Scalar(1) / den;
+    const Scalar mx = x * inv_den, my = y * inv_den;
+    uv << fx * mx + cx, fy * my + cy;
+    if (d_uv_d_p) {
+      const Vec3 d_den_d_p = Vec3(alpha * beta * x / d, alpha * beta * y / d, alpha * z / d + Scalar(1) - alpha);
+      d_uv_d_p->row(0) = -fx * mx * inv_den * d_den_d_p.transpose();
+      d_uv_d_p->row(1) = -fy * my * inv_den * d_den_d_p.transpose();
+      (*d_uv_d_p)(0, 0) += fx * inv_den;
+      (*d_uv_d_p)(1, 1) += fy * inv_den;
+    }
+    if (d_uv_d_params) {
+      ParamJacobian& j = *d_uv_d_params;
+      j.setZero();
+      j(0, 0) = mx;
+      j(1, 1) = my;
+      j(0, 2) = Scalar(1);
+      j(1, 3) = Scalar(1);
+      const Scalar d_den_d_alpha = d - z;
+      const Scalar d_den_d_beta = alpha * r2 / (Scalar(2) * d);
+      j(0, 4) = -fx * mx * inv_den * d_den_d_alpha;
+      j(1, 4) = -fy * my * inv_den * d_den_d_alpha;
+      j(0, 5) = -fx * mx * inv_den * d_den_d_beta;
+      j(1, 5) = -fy * my * inv_den * d_den_d_beta;
+    }
+    return true;
+  }
+
+  // Closed form; false outside the unprojection domain r^2 < 1/(beta (2 alpha - 1)) (alpha > 0.5).
+  bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
+    const Scalar fx = params_[0], fy = params_[1];
+    const Scalar alpha = params_[4], beta = params_[5];
+    const Scalar mx = (uv[0] - params_[2]) / fx, my = (uv[1] - params_[3]) / fy;
+    const Scalar r2 = mx * mx + my * my;
+    const Scalar s2 = Scalar(1) - (Scalar(2) * alpha - Scalar(1)) * beta * r2;
+    if (!(s2 > Scalar(0))) return false;
+    const Scalar s = std::sqrt(s2);
+    const Scalar q = alpha * s + Scalar(1) - alpha;
+    const Scalar n = Scalar(1) - beta * alpha * alpha * r2;
+    const Scalar mz = n / q;
+    Eigen::Matrix<Scalar, 3, 3> d_b_d_ray;
+    bearing = camera_detail::normalizeWithJacobian<Scalar>(Vec3(mx, my, mz), d_bearing_d_uv ? &d_b_d_ray : nullptr);
+    if (d_bearing_d_uv) {
+      const Scalar d_q_d_r2 = -alpha * (Scalar(2) * alpha - Scalar(1)) * beta / (Scalar(2) * s);
+      const Scalar d_mz_d_r2 = (-beta * alpha * alpha * q - n * d_q_d_r2) / (q * q);
+      Mat32 d_ray_d_m = Mat32::Zero();
+      d_ray_d_m(0, 0) = Scalar(1);
+      d_ray_d_m(1, 1) = Scalar(1);
+      d_ray_d_m(2, 0) = d_mz_d_r2 * Scalar(2) * mx;
+      d_ray_d_m(2, 1) = d_mz_d_r2 * Scalar(2) * my;
+      d_ray_d_m.col(0) /= fx;
+      d_ray_d_m.col(1) /= fy;
+      *d_bearing_d_uv = d_b_d_ray * d_ray_d_m;
+    }
+    return true;
+  }
+
+ private:
+  Params params_;
+  Scalar w_;
+};
+
+}  // namespace voca
