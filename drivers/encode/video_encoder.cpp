@@ -1,0 +1,494 @@
+// libavcodec encoder for gray frames and the .mp4 file encoder built on it.
+
+#include "drivers/encode/video_encoder.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <system_error>
+
+#include <fmt/core.h>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/error.h>
+#include <libavutil/mem.h>
+#include <libavutil/opt.h>
+}
+
+#include "voca/core/error.h"
+
+namespace voca::encode {
+
+namespace {
+
+constexpr std::array<std::string_view, 3> kSupportedCodecs = {"libx264", "mpeg4", "mpeg2video"};
+
+std::string avError(int code) {
+  std::array<char, AV_ERROR_MAX_STRING_SIZE> text{};
+  av_strerror(code, text.data(), text.size());
+  return text.data();
+}
+
+struct CodecContextDeleter {
+  void operator()(AVCodecContext* ctx) const { avcodec_free_context(&ctx); }
+};
+struct FrameDeleter {
+  void operator()(AVFrame* frame) const { av_frame_free(&frame); }
+};
+struct PacketDeleter {
+  void operator()(AVPacket* packet) const { av_packet_free(&packet); }
+};
+using CodecContextPtr = std::unique_ptr<AVCodecContext, CodecContextDeleter>;
+using FramePtr = std::unique_ptr<AVFrame, FrameDeleter>;
+using PacketPtr = std::unique_ptr<AVPacket, PacketDeleter>;
+
+std::string readWholeFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw RuntimeFailure(fmt::format("cannot read the first-pass statistics {}", path.string()));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A fresh folder under the system temp directory, removed with everything in it on destruction.
+class TempDir {
+ public:
+  TempDir() {
+    std::random_device seed;
+    const auto base = std::filesystem::temp_directory_path();
+    for (int attempt = 0; attempt < 16; ++attempt) {
+      path_ = base / fmt::format("voca-encode-{:08x}", seed());
+      std::error_code error;
+      if (std::filesystem::create_directory(path_, error)) return;
+    }
+    throw RuntimeFailure(fmt::format("cannot create a temporary folder in {}", base.string()));
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace
+
+std::int64_t parseBitrate(std::string_view text) {
+  const auto bad = [&] {
+    return InputError(
+        fmt::format("bitrate '{}': expected a positive number of bits per second, optionally with "
+                    "a k or M suffix (e.g. 500k, 1M, 1000000)",
+                    text));
+  };
+  if (text.empty()) throw bad();
+  double scale = 1.0;
+  std::string_view number = text;
+  const char suffix = text.back();
+  if (suffix == 'k' || suffix == 'K') {
+    scale = 1e3;
+    number.remove_suffix(1);
+  } else if (suffix == 'm' || suffix == 'M') {
+    scale = 1e6;
+    number.remove_suffix(1);
+  }
+  // Digits with at most one decimal point; no signs, exponents or spaces.
+  if (number.empty() || std::count(number.begin(), number.end(), '.') > 1 ||
+      !std::all_of(number.begin(), number.end(), [](char c) { return (c >= '0' && c <= '9') || c == '.'; }) ||
+      number == ".") {
+    throw bad();
+  }
+  const double value = std::stod(std::string(number)) * scale;
+  // Below 1 kbit/s no codec can hold a frame; above 10 Gbit/s it is surely a typo.
+  if (!(value >= 1000.0 && value <= 1e10)) {
+    throw InputError(fmt::format("bitrate '{}' = {} bit/s is outside 1k..10G", text, value));
+  }
+  return static_cast<std::int64_t>(std::llround(value));
+}
+
+struct VideoEncoder::Impl {
+  EncoderSettings settings;
+  EncoderPass pass = EncoderPass::kSingle;
+  std::filesystem::path stats_file;
+  std::string stats;  // mpeg4/mpeg2video first pass: accumulated rate-control lines
+  CodecContextPtr ctx;
+  FramePtr frame;
+  PacketPtr packet;
+  int input_width = 0, input_height = 0;
+  std::vector<EncodedPacket> packets;  // grows to the largest burst, then reused
+  std::size_t num_packets = 0;
+  bool flushed = false;
+
+  void drain() {
+    while (true) {
+      const int ret = avcodec_receive_packet(ctx.get(), packet.get());
+      if (ret == AVERROR(EAGAIN) || ret == AVERROR_EOF) break;
+      if (ret < 0) throw RuntimeFailure(fmt::format("{} encoder failed: {}", settings.codec, avError(ret)));
+      if (num_packets == packets.size()) packets.emplace_back();
+      EncodedPacket& out = packets[num_packets++];
+      out.bytes.assign(packet->data, packet->data + packet->size);
+      out.pts = packet->pts;
+      out.dts = packet->dts;
+      out.keyframe = (packet->flags & AV_PKT_FLAG_KEY) != 0;
+      av_packet_unref(packet.get());
+      if (pass == EncoderPass::kFirst && ctx->stats_out != nullptr) stats += ctx->stats_out;
+    }
+  }
+};
+
+VideoEncoder::VideoEncoder() : impl_(std::make_unique<Impl>()) {}
+VideoEncoder::~VideoEncoder() = default;
+VideoEncoder::VideoEncoder(VideoEncoder&&) noexcept = default;
+VideoEncoder& VideoEncoder::operator=(VideoEncoder&&) noexcept = default;
+
+void VideoEncoder::open(const EncoderSettings& settings, int width, int height, EncoderPass pass,
+                        const std::filesystem::path& stats_file) {
+  Impl& s = *impl_;
+  s.ctx.reset();
+  s.flushed = false;
+  s.stats.clear();
+  s.num_packets = 0;
+
+  if (std::find(kSupportedCodecs.begin(), kSupportedCodecs.end(), settings.codec) == kSupportedCodecs.end()) {
+    throw InputError(fmt::format("codec '{}': expected one of libx264, mpeg4, mpeg2video", settings.codec));
+  }
+  if (settings.bitrate_bps <= 0)
+    throw InputError(fmt::format("bitrate {} bit/s: must be positive", settings.bitrate_bps));
+  if (settings.fps_num <= 0 || settings.fps_den <= 0) {
+    throw InputError(fmt::format("frame rate {}/{}: must be positive", settings.fps_num, settings.fps_den));
+  }
+  // 4:2:0 chroma needs even sizes: code the even top-left crop so pixel coordinates stay valid.
+  const int coded_width = width & ~1;
+  const int coded_height = height & ~1;
+  if (coded_width < 16 || coded_height < 16) {
+    throw InputError(fmt::format("frame size {}x{}: the encoder needs at least 16x16 pixels", width, height));
+  }
+  if (pass != EncoderPass::kSingle && stats_file.empty()) {
+    throw InputError("two-pass encoding needs a statistics file path");
+  }
+
+  const AVCodec* codec = avcodec_find_encoder_by_name(settings.codec.c_str());
+  if (codec == nullptr) {
+    throw RuntimeFailure(fmt::format("this FFmpeg build has no {} encoder (install libavcodec with {})", settings.codec,
+                                     settings.codec));
+  }
+  const AVRational rate{settings.fps_num, settings.fps_den};
+  if (codec->supported_framerates != nullptr) {
+    bool supported = false;
+    std::string list;
+    for (const AVRational* r = codec->supported_framerates; r->num != 0; ++r) {
+      supported = supported || av_cmp_q(*r, rate) == 0;
+      if (r->den == 1) list += fmt::format("{}{}", list.empty() ? "" : ", ", r->num);
+    }
+    if (!supported) {
+      throw InputError(fmt::format("frame rate {}/{}: {} supports only standard rates ({}, and the /1001 ones)",
+                                   settings.fps_num, settings.fps_den, settings.codec, list));
+    }
+  }
+
+  CodecContextPtr ctx(avcodec_alloc_context3(codec));
+  if (!ctx) throw RuntimeFailure("out of memory allocating the encoder");
+  ctx->width = coded_width;
+  ctx->height = coded_height;
+  ctx->pix_fmt = AV_PIX_FMT_YUV420P;
+  // Gray images use the full 0..255 range; signalling it keeps the luma values as they are instead
+  // of squeezing them into studio range 16..235 as a swscale conversion would.
+  ctx->color_range = AVCOL_RANGE_JPEG;
+  ctx->time_base = av_inv_q(rate);  // one tick per frame: pts = frame index
+  ctx->framerate = rate;
+  ctx->bit_rate = settings.bitrate_bps;
+  ctx->max_b_frames = 0;  // causal stream: decode order = capture order
+  ctx->thread_count = settings.threads;
+  if (settings.global_header) ctx->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+  if (pass == EncoderPass::kFirst) ctx->flags |= AV_CODEC_FLAG_PASS1;
+  if (pass == EncoderPass::kSecond) ctx->flags |= AV_CODEC_FLAG_PASS2;
+
+  AVDictionary* options = nullptr;
+  std::string stats_in;
+  if (settings.codec == "libx264") {
+    // libavcodec's libx264 wrapper maps PASS1/PASS2 to x264's stat write/read and hands the file
+    // name to x264 as its "stats" option (x264 also writes <stats>.mbtree beside it).
+    av_dict_set(&options, "preset", settings.x264_preset.c_str(), 0);
+    if (!settings.x264_tune.empty()) av_dict_set(&options, "tune", settings.x264_tune.c_str(), 0);
+    if (!settings.x264_params.empty()) av_dict_set(&options, "x264-params", settings.x264_params.c_str(), 0);
+    if (pass != EncoderPass::kSingle) av_dict_set(&options, "stats", stats_file.c_str(), 0);
+  } else {
+    ctx->gop_size = settings.gop_size;
+    if (pass == EncoderPass::kSecond) {
+      // mpegvideo's two-pass rate control reads pass 1's lines from stats_in (libavcodec frees it).
+      stats_in = readWholeFile(stats_file);
+      ctx->stats_in = av_strdup(stats_in.c_str());
+    }
+  }
+  const int ret = avcodec_open2(ctx.get(), codec, &options);
+  std::string unused;
+  for (const AVDictionaryEntry* e = av_dict_get(options, "", nullptr, AV_DICT_IGNORE_SUFFIX); e != nullptr;
+       e = av_dict_get(options, "", e, AV_DICT_IGNORE_SUFFIX)) {
+    unused += fmt::format(" {}={}", e->key, e->value);
+  }
+  av_dict_free(&options);
+  if (ret < 0) {
+    throw InputError(
+        fmt::format("cannot open the {} encoder for {}x{} at {} bit/s, {}/{} fps ({}); check the "
+                    "settings (x264 params '{}')",
+                    settings.codec, coded_width, coded_height, settings.bitrate_bps, settings.fps_num, settings.fps_den,
+                    avError(ret), settings.x264_params));
+  }
+  if (!unused.empty()) throw InputError(fmt::format("{} encoder does not know the options:{}", settings.codec, unused));
+
+  FramePtr frame(av_frame_alloc());
+  PacketPtr packet(av_packet_alloc());
+  if (!frame || !packet) throw RuntimeFailure("out of memory allocating encoder buffers");
+  frame->format = ctx->pix_fmt;
+  frame->width = coded_width;
+  frame->height = coded_height;
+  frame->color_range = AVCOL_RANGE_JPEG;
+  if (const int r = av_frame_get_buffer(frame.get(), 0); r < 0) {
+    throw RuntimeFailure(fmt::format("cannot allocate a {}x{} frame: {}", coded_width, coded_height, avError(r)));
+  }
+  for (int plane = 1; plane < 3; ++plane) {
+    for (int y = 0; y < coded_height / 2; ++y) {
+      std::memset(frame->data[plane] + static_cast<std::ptrdiff_t>(y) * frame->linesize[plane], 128,
+                  static_cast<std::size_t>(coded_width / 2));
+    }
+  }
+
+  s.settings = settings;
+  s.pass = pass;
+  s.stats_file = stats_file;
+  s.ctx = std::move(ctx);
+  s.frame = std::move(frame);
+  s.packet = std::move(packet);
+  s.input_width = width;
+  s.input_height = height;
+}
+
+std::span<const EncodedPacket> VideoEncoder::encode(GrayView image, std::int64_t pts) {
+  Impl& s = *impl_;
+  if (!s.ctx || s.flushed) throw RuntimeFailure("VideoEncoder::encode called on an encoder that is not open");
+  if (image.width != s.input_width || image.height != s.input_height) {
+    throw InputError(
+        fmt::format("frame of {}x{} given to an encoder opened for {}x{}: all frames of a video must "
+                    "have the same size",
+                    image.width, image.height, s.input_width, s.input_height));
+  }
+  s.num_packets = 0;
+  // The codec may still reference the previous frame's buffer; this copies (chroma included) if so.
+  if (const int r = av_frame_make_writable(s.frame.get()); r < 0) {
+    throw RuntimeFailure(fmt::format("cannot get a writable frame: {}", avError(r)));
+  }
+  AVFrame& frame = *s.frame;
+  for (int y = 0; y < frame.height; ++y) {
+    std::memcpy(frame.data[0] + static_cast<std::ptrdiff_t>(y) * frame.linesize[0], image.row(y),
+                static_cast<std::size_t>(frame.width));
+  }
+  frame.pts = pts;
+  const int ret = avcodec_send_frame(s.ctx.get(), &frame);
+  if (ret < 0)
+    throw RuntimeFailure(fmt::format("{} encoder rejected frame pts {}: {}", s.settings.codec, pts, avError(ret)));
+  s.drain();
+  return {s.packets.data(), s.num_packets};
+}
+
+std::span<const EncodedPacket> VideoEncoder::flush() {
+  Impl& s = *impl_;
+  if (!s.ctx) throw RuntimeFailure("VideoEncoder::flush called on an encoder that is not open");
+  s.num_packets = 0;
+  if (s.flushed) return {};
+  if (const int ret = avcodec_send_frame(s.ctx.get(), nullptr); ret < 0) {
+    throw RuntimeFailure(fmt::format("{} encoder failed to flush: {}", s.settings.codec, avError(ret)));
+  }
+  s.drain();
+  s.flushed = true;
+  if (s.pass == EncoderPass::kFirst && s.settings.codec != "libx264") {
+    std::ofstream out(s.stats_file, std::ios::binary);
+    out << s.stats;
+    if (!out) throw RuntimeFailure(fmt::format("cannot write the first-pass statistics {}", s.stats_file.string()));
+  }
+  return {s.packets.data(), s.num_packets};
+}
+
+bool VideoEncoder::isOpen() const { return impl_ && impl_->ctx != nullptr; }
+int VideoEncoder::width() const { return impl_->ctx ? impl_->ctx->width : 0; }
+int VideoEncoder::height() const { return impl_->ctx ? impl_->ctx->height : 0; }
+const EncoderSettings& VideoEncoder::settings() const { return impl_->settings; }
+const AVCodecContext* VideoEncoder::codecContext() const { return impl_->ctx.get(); }
+
+namespace {
+
+// Writes the packets of one video stream into an .mp4 file.
+class Mp4Writer {
+ public:
+  // Opens the file first so an unwritable path fails before any encoding work.
+  explicit Mp4Writer(const std::filesystem::path& path) : path_(path) {
+    if (const int r = avformat_alloc_output_context2(&format_, nullptr, "mp4", path.c_str()); r < 0 || !format_) {
+      throw RuntimeFailure(fmt::format("cannot create an mp4 muxer: {}", avError(r)));
+    }
+    if (const int r = avio_open(&format_->pb, path.c_str(), AVIO_FLAG_WRITE); r < 0) {
+      throw InputError(fmt::format("cannot write {}: {}", path.string(), avError(r)));
+    }
+  }
+  ~Mp4Writer() {
+    if (format_ != nullptr) {
+      if (format_->pb != nullptr) avio_closep(&format_->pb);
+      avformat_free_context(format_);
+    }
+  }
+  Mp4Writer(const Mp4Writer&) = delete;
+  Mp4Writer& operator=(const Mp4Writer&) = delete;
+
+  void begin(const AVCodecContext& ctx) {
+    stream_ = avformat_new_stream(format_, nullptr);
+    if (stream_ == nullptr) throw RuntimeFailure("cannot add a video stream to the mp4 muxer");
+    if (const int r = avcodec_parameters_from_context(stream_->codecpar, &ctx); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot copy codec parameters: {}", avError(r)));
+    }
+    codec_time_base_ = ctx.time_base;
+    stream_->time_base = ctx.time_base;
+    stream_->avg_frame_rate = ctx.framerate;
+    stream_->r_frame_rate = ctx.framerate;
+    if (const int r = avformat_write_header(format_, nullptr); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot write the mp4 header of {}: {}", path_.string(), avError(r)));
+    }
+    packet_.reset(av_packet_alloc());
+    if (!packet_) throw RuntimeFailure("out of memory allocating a packet");
+  }
+
+  void write(const EncodedPacket& in) {
+    AVPacket* packet = packet_.get();
+    if (const int r = av_new_packet(packet, static_cast<int>(in.bytes.size())); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot allocate a packet: {}", avError(r)));
+    }
+    std::memcpy(packet->data, in.bytes.data(), in.bytes.size());
+    packet->pts = in.pts;
+    packet->dts = in.dts;
+    packet->duration = 1;  // one frame; lets the muxer give the last frame its length
+    packet->flags = in.keyframe ? AV_PKT_FLAG_KEY : 0;
+    packet->stream_index = stream_->index;
+    av_packet_rescale_ts(packet, codec_time_base_, stream_->time_base);
+    const int r = av_write_frame(format_, packet);
+    av_packet_unref(packet);
+    if (r < 0) throw RuntimeFailure(fmt::format("cannot write to {}: {}", path_.string(), avError(r)));
+  }
+
+  void end() {
+    if (const int r = av_write_trailer(format_); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot finish {}: {}", path_.string(), avError(r)));
+    }
+    if (const int r = avio_closep(&format_->pb); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot close {}: {}", path_.string(), avError(r)));
+    }
+  }
+
+ private:
+  std::filesystem::path path_;
+  AVFormatContext* format_ = nullptr;
+  AVStream* stream_ = nullptr;
+  AVRational codec_time_base_{1, 1};
+  PacketPtr packet_;
+};
+
+// Removes a file unless released: no half-written video is left behind after an error.
+class RemoveOnFailure {
+ public:
+  explicit RemoveOnFailure(std::filesystem::path path) : path_(std::move(path)) {}
+  ~RemoveOnFailure() {
+    if (armed_) {
+      std::error_code ignored;
+      std::filesystem::remove(path_, ignored);
+    }
+  }
+  RemoveOnFailure(const RemoveOnFailure&) = delete;
+  RemoveOnFailure& operator=(const RemoveOnFailure&) = delete;
+  void release() { armed_ = false; }
+
+ private:
+  std::filesystem::path path_;
+  bool armed_ = true;
+};
+
+}  // namespace
+
+EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSettings& settings,
+                             const FrameSource& source, const EncodeProgress& progress) {
+  using Clock = std::chrono::steady_clock;
+  EncoderSettings file_settings = settings;
+  file_settings.global_header = true;  // mp4 keeps SPS/PPS in the sample description
+  const int num_passes = settings.two_pass ? 2 : 1;
+
+  std::optional<TempDir> temp;
+  std::filesystem::path stats_file;
+  if (num_passes == 2) {
+    temp.emplace();
+    stats_file = temp->path() / "pass1.log";
+  }
+
+  Mp4Writer writer(path);
+  RemoveOnFailure cleanup(path);
+  EncodeResult result;
+  int first_pass_frames = -1;
+
+  for (int pass_index = 1; pass_index <= num_passes; ++pass_index) {
+    const bool final_pass = pass_index == num_passes;
+    const EncoderPass pass =
+        num_passes == 1 ? EncoderPass::kSingle : (final_pass ? EncoderPass::kSecond : EncoderPass::kFirst);
+    VideoEncoder encoder;
+    int frame_index = 0;
+    Clock::duration encode_time{};
+
+    const auto consume = [&](std::span<const EncodedPacket> packets) {
+      if (!final_pass) return;
+      for (const EncodedPacket& packet : packets) {
+        writer.write(packet);
+        result.payload_bytes += static_cast<std::int64_t>(packet.bytes.size());
+        result.num_keyframes += packet.keyframe ? 1 : 0;
+      }
+    };
+    source([&](GrayView image) {
+      if (!encoder.isOpen()) {
+        encoder.open(file_settings, image.width, image.height, pass, stats_file);
+        if (final_pass) writer.begin(*encoder.codecContext());
+      }
+      const Clock::time_point start = Clock::now();
+      const std::span<const EncodedPacket> packets = encoder.encode(image, frame_index);
+      encode_time += Clock::now() - start;
+      consume(packets);
+      ++frame_index;
+      if (progress) progress(pass_index, num_passes, frame_index - 1);
+    });
+    if (frame_index == 0) throw InputError(fmt::format("no frames to encode into {}", path.string()));
+    if (first_pass_frames >= 0 && frame_index != first_pass_frames) {
+      throw InputError(
+          fmt::format("the frame source gave {} frames in pass 1 but {} in pass 2", first_pass_frames, frame_index));
+    }
+    first_pass_frames = frame_index;
+    const Clock::time_point start = Clock::now();
+    const std::span<const EncodedPacket> tail = encoder.flush();
+    encode_time += Clock::now() - start;
+    consume(tail);
+    result.pass_ms_per_frame.push_back(std::chrono::duration<double, std::milli>(encode_time).count() / frame_index);
+    result.num_frames = frame_index;
+    result.width = encoder.width();
+    result.height = encoder.height();
+  }
+  writer.end();
+  cleanup.release();
+
+  result.file_bytes = static_cast<std::int64_t>(std::filesystem::file_size(path));
+  result.duration_s = result.num_frames * static_cast<double>(settings.fps_den) / settings.fps_num;
+  result.achieved_bitrate_bps = static_cast<double>(result.payload_bytes) * 8.0 / result.duration_s;
+  return result;
+}
+
+}  // namespace voca::encode

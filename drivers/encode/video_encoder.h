@@ -1,0 +1,120 @@
+#pragma once
+// Gray frames -> compressed video with libavcodec: a frame-by-frame encoder (live capture) and a
+// file encoder (datasets -> .mp4, two-pass constant bitrate as the VOCA paper encodes).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "voca/core/image.h"
+
+struct AVCodecContext;
+
+namespace voca::encode {
+
+// The x264 options of the paper (supplementary "Video Encoding"): no B-frames so the stream is
+// causal, one reference frame, a keyframe at most every 1000 frames.
+inline constexpr const char* kPaperX264Params =
+    "partitions=p8x8,p4x4,i8x8:keyint=1000:me=umh:merange=64:subme=6:bframes=0:ref=1";
+
+// How to encode: codec (libx264, mpeg4, mpeg2video), target bitrate, frame rate and rate control.
+struct EncoderSettings {
+  std::string codec = "libx264";
+  std::int64_t bitrate_bps = 500000;
+  int fps_num = 30, fps_den = 1;  // the official VOCA code encodes at 30 fps whatever the dataset rate
+  std::string x264_params = kPaperX264Params;
+  bool two_pass = true;                // file encoding only; the live encoder is always one pass
+  std::string x264_preset = "medium";  // the ffmpeg CLI default, which the paper used
+  std::string x264_tune;               // e.g. "zerolatency" for live capture; empty = none
+  int gop_size = 600;  // mpeg4 / mpeg2video: max frames between keyframes (libx264 takes keyint from x264_params)
+  int threads = 0;     // 0 = the codec's automatic choice
+  bool global_header = false;  // codec headers out of band (extradata) as .mp4 needs; in band for raw streams
+};
+
+// Parses "500k", "1M", "1.5M", "1000000" (bits per second; k = 1000, M = 1000000).
+// Throws InputError on anything else, including zero and negative rates.
+std::int64_t parseBitrate(std::string_view text);
+
+// One compressed access unit. pts/dts are in frames at the encoder's frame rate.
+struct EncodedPacket {
+  std::vector<std::uint8_t> bytes;
+  std::int64_t pts = 0;
+  std::int64_t dts = 0;
+  bool keyframe = false;
+};
+
+// Which pass an encoder instance runs. Two-pass rate control runs the whole sequence through a
+// kFirst encoder (statistics only) and then through a kSecond encoder reading those statistics.
+enum class EncoderPass { kSingle, kFirst, kSecond };
+
+// A frame-by-frame encoder for 8-bit gray frames. The luma plane carries the gray values
+// unchanged (full range, signalled in the stream) and chroma is a constant 128, so a decoder's
+// Y plane returns the original intensities up to compression loss. Odd widths/heights cannot be
+// coded in 4:2:0; the encoder codes the largest even top-left crop (pixel coordinates unchanged)
+// and reports it in width()/height(). Packet buffers are reused between calls.
+class VideoEncoder {
+ public:
+  VideoEncoder();
+  ~VideoEncoder();
+  VideoEncoder(VideoEncoder&&) noexcept;
+  VideoEncoder& operator=(VideoEncoder&&) noexcept;
+  VideoEncoder(const VideoEncoder&) = delete;
+  VideoEncoder& operator=(const VideoEncoder&) = delete;
+
+  // Opens the codec for frames of width x height. stats_file is required for kFirst/kSecond:
+  // pass 1 writes it (libx264 writes its own stats file, and its .mbtree beside it), pass 2 reads it.
+  // Throws InputError for an unknown codec or invalid settings, RuntimeFailure when libavcodec fails.
+  void open(const EncoderSettings& settings, int width, int height, EncoderPass pass = EncoderPass::kSingle,
+            const std::filesystem::path& stats_file = {});
+
+  // Encodes one frame with presentation time pts (in frames). Returns the packets that came out
+  // (zero or more: encoders with lookahead hold frames back); valid until the next call.
+  // Throws InputError when the frame size differs from the size given to open().
+  std::span<const EncodedPacket> encode(GrayView frame, std::int64_t pts);
+
+  // Drains the frames held back. After flush() the encoder must be re-opened to encode again.
+  std::span<const EncodedPacket> flush();
+
+  bool isOpen() const;
+  int width() const;  // coded size (even)
+  int height() const;
+  const EncoderSettings& settings() const;
+  // For muxers: the codec context (codec parameters, global headers). Null before open().
+  const AVCodecContext* codecContext() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Called for each frame given to encodeVideoFile: pass (1-based), number of passes, frame index.
+using EncodeProgress = std::function<void(int pass, int num_passes, int frame_index)>;
+// Supplies the whole sequence, in order, by calling emit once per frame. It is called once per
+// pass, so it must produce the same frames each time.
+using FrameSource = std::function<void(const std::function<void(GrayView)>& emit)>;
+
+// What encodeVideoFile produced.
+struct EncodeResult {
+  int num_frames = 0;
+  int width = 0, height = 0;  // coded size
+  int num_keyframes = 0;
+  std::int64_t payload_bytes = 0;         // sum of the video packets
+  std::int64_t file_bytes = 0;            // the .mp4, container included
+  double duration_s = 0.0;                // num_frames / fps
+  double achieved_bitrate_bps = 0.0;      // payload_bytes * 8 / duration_s
+  std::vector<double> pass_ms_per_frame;  // encode wall time per frame, one entry per pass
+};
+
+// Encodes all frames of source into an .mp4 at path (created or overwritten), with pts = frame
+// index at settings' frame rate. Two passes when settings.two_pass (statistics in a temporary
+// folder that is removed afterwards). Throws InputError on an empty source, frames of different
+// sizes or an unwritable path; RuntimeFailure when libav fails.
+EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSettings& settings,
+                             const FrameSource& source, const EncodeProgress& progress = {});
+
+}  // namespace voca::encode

@@ -1,0 +1,135 @@
+#pragma once
+// Test helpers for the encode suites: synthetic moving frames, and an independent read-back of a
+// video file with libavformat/libavcodec (what a player or our decoder would see).
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+}
+
+#include "voca/core/image.h"
+
+namespace voca::test {
+
+// Smooth value noise (several octaves of a random lattice with smoothstep blending), evaluated at
+// real-valued coordinates so that a shifted frame is an exact sub-pixel translation of the scene.
+class NoiseTexture {
+ public:
+  explicit NoiseTexture(std::uint32_t seed) {
+    std::uint32_t state = seed;
+    lattice_.resize(kSize * kSize);
+    for (float& v : lattice_) {
+      state = state * 1664525u + 1013904223u;  // LCG: the same texture on every platform
+      v = static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+    }
+  }
+  // Intensity 0..255 at (x, y).
+  float operator()(double x, double y) const {
+    double sum = 0.0, weight_sum = 0.0;
+    double spacing = 32.0, weight = 1.0;
+    for (int octave = 0; octave < 4; ++octave, spacing /= 2.0, weight *= 0.6) {
+      sum += weight * lattice(x / spacing + 17.0 * octave, y / spacing + 31.0 * octave);
+      weight_sum += weight;
+    }
+    return static_cast<float>(255.0 * sum / weight_sum);
+  }
+
+ private:
+  static constexpr int kSize = 256;
+  double lattice(double u, double v) const {
+    const double fu = std::floor(u), fv = std::floor(v);
+    const double a = smooth(u - fu), b = smooth(v - fv);
+    const int iu = static_cast<int>(fu), iv = static_cast<int>(fv);
+    const auto at = [&](int i, int j) {
+      return lattice_[static_cast<std::size_t>(((j % kSize) + kSize) % kSize) * kSize + ((i % kSize) + kSize) % kSize];
+    };
+    return (1 - b) * ((1 - a) * at(iu, iv) + a * at(iu + 1, iv)) +
+           b * ((1 - a) * at(iu, iv + 1) + a * at(iu + 1, iv + 1));
+  }
+  static double smooth(double t) { return t * t * (3.0 - 2.0 * t); }
+  std::vector<float> lattice_;
+};
+
+// Frame i of a camera panning over the texture at (vx, vy) pixels per frame (sub-pixel steps).
+inline void renderShiftedFrame(const NoiseTexture& texture, int index, double vx, double vy, GrayImage& out) {
+  for (int y = 0; y < out.height(); ++y) {
+    for (int x = 0; x < out.width(); ++x) {
+      const float v = texture(x + index * vx, y + index * vy);
+      out(x, y) = static_cast<std::uint8_t>(std::lround(std::fmin(255.0f, std::fmax(0.0f, v))));
+    }
+  }
+}
+
+// What the file holds, as read back independently of the encoder.
+struct VideoProbe {
+  std::string codec_name;
+  int width = 0, height = 0;
+  AVRational avg_frame_rate{0, 1};
+  int num_packets = 0;
+  std::vector<bool> packet_keyframe;  // in file order
+  std::vector<char> picture_types;    // decoded frames in output order: 'I', 'P', 'B', ...
+  std::vector<GrayImage> luma;        // decoded Y planes (only if keep_luma)
+  std::int64_t payload_bytes = 0;
+  double duration_s = 0.0;  // stream duration from the container
+};
+
+inline VideoProbe probeVideo(const std::filesystem::path& path, bool keep_luma = false) {
+  VideoProbe probe;
+  AVFormatContext* format = nullptr;
+  if (avformat_open_input(&format, path.c_str(), nullptr, nullptr) < 0) throw std::runtime_error("cannot open");
+  avformat_find_stream_info(format, nullptr);
+  const int index = av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
+  if (index < 0) throw std::runtime_error("no video stream");
+  AVStream* stream = format->streams[index];
+  probe.codec_name = avcodec_get_name(stream->codecpar->codec_id);
+  probe.width = stream->codecpar->width;
+  probe.height = stream->codecpar->height;
+  probe.avg_frame_rate = stream->avg_frame_rate;
+  probe.duration_s = stream->duration * av_q2d(stream->time_base);
+
+  const AVCodec* codec = avcodec_find_decoder(stream->codecpar->codec_id);
+  AVCodecContext* ctx = avcodec_alloc_context3(codec);
+  avcodec_parameters_to_context(ctx, stream->codecpar);
+  ctx->thread_count = 1;
+  if (avcodec_open2(ctx, codec, nullptr) < 0) throw std::runtime_error("cannot open decoder");
+  AVPacket* packet = av_packet_alloc();
+  AVFrame* frame = av_frame_alloc();
+  const auto receive = [&] {
+    while (avcodec_receive_frame(ctx, frame) == 0) {
+      probe.picture_types.push_back(av_get_picture_type_char(frame->pict_type));
+      if (keep_luma) {
+        GrayImage& y = probe.luma.emplace_back(frame->width, frame->height);
+        for (int r = 0; r < frame->height; ++r) {
+          for (int c = 0; c < frame->width; ++c) y(c, r) = frame->data[0][r * frame->linesize[0] + c];
+        }
+      }
+      av_frame_unref(frame);
+    }
+  };
+  while (av_read_frame(format, packet) >= 0) {
+    if (packet->stream_index == index) {
+      ++probe.num_packets;
+      probe.payload_bytes += packet->size;
+      probe.packet_keyframe.push_back((packet->flags & AV_PKT_FLAG_KEY) != 0);
+      avcodec_send_packet(ctx, packet);
+      receive();
+    }
+    av_packet_unref(packet);
+  }
+  avcodec_send_packet(ctx, nullptr);
+  receive();
+  av_frame_free(&frame);
+  av_packet_free(&packet);
+  avcodec_free_context(&ctx);
+  avformat_close_input(&format);
+  return probe;
+}
+
+}  // namespace voca::test
