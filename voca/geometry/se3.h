@@ -20,12 +20,15 @@ class SE3 {
   SE3() : translation_(Vec3::Zero()) {}
   SE3(const SO3<Scalar>& rotation, const Vec3& translation) : rotation_(rotation), translation_(translation) {}
   SE3(const Quaternion& q, const Vec3& translation) : rotation_(q), translation_(translation) {}
+  // The rotation matrix is projected onto SO(3).
+  SE3(const Mat3& rotation, const Vec3& translation) : rotation_(rotation), translation_(translation) {}
   // From a 4x4 or 3x4 homogeneous matrix; the rotation block is projected onto SO(3).
   template <typename Derived>
   explicit SE3(const Eigen::MatrixBase<Derived>& m)
       : rotation_(Mat3(m.template block<3, 3>(0, 0))), translation_(m.template block<3, 1>(0, 3)) {
-    static_assert(Derived::ColsAtCompileTime == 4 && (Derived::RowsAtCompileTime == 3 || Derived::RowsAtCompileTime == 4),
-                  "SE3 from a matrix needs 3x4 or 4x4");
+    static_assert(
+        Derived::ColsAtCompileTime == 4 && (Derived::RowsAtCompileTime == 3 || Derived::RowsAtCompileTime == 4),
+        "SE3 from a matrix needs 3x4 or 4x4");
   }
 
   static SE3 identity() { return SE3(); }
@@ -79,12 +82,68 @@ class SE3 {
     return adj;
   }
 
+  // xi = (upsilon, omega) -> [[omega^, upsilon], [0, 0]].
+  static Mat4 hat(const Vec6& xi) {
+    Mat4 m = Mat4::Zero();
+    m.template block<3, 3>(0, 0) = SO3<Scalar>::hat(xi.template tail<3>());
+    m.template block<3, 1>(0, 3) = xi.template head<3>();
+    return m;
+  }
+  static Vec6 vee(const Mat4& m) {
+    Vec6 xi;
+    xi.template head<3>() = m.template block<3, 1>(0, 3);
+    xi.template tail<3>() = SO3<Scalar>::vee(m.template block<3, 3>(0, 0));
+    return xi;
+  }
+
+  // Left Jacobian: exp(xi + d) ~= exp(J_l(xi) d) exp(xi); [[J, Q], [0, J]] with J the SO(3) left
+  // Jacobian of omega and Q Barfoot's coupling block.
+  static Mat6 leftJacobian(const Vec6& xi) {
+    const Vec3 omega = xi.template tail<3>();
+    const Mat3 j = SO3<Scalar>::leftJacobian(omega);
+    Mat6 jac;
+    jac.template block<3, 3>(0, 0) = j;
+    jac.template block<3, 3>(0, 3) = jacobianCoupling(xi);
+    jac.template block<3, 3>(3, 0).setZero();
+    jac.template block<3, 3>(3, 3) = j;
+    return jac;
+  }
+  // Inverse of leftJacobian(xi): [[J^-1, -J^-1 Q J^-1], [0, J^-1]].
+  static Mat6 leftJacobianInverse(const Vec6& xi) {
+    const Mat3 j_inv = SO3<Scalar>::leftJacobianInverse(xi.template tail<3>());
+    Mat6 jac;
+    jac.template block<3, 3>(0, 0) = j_inv;
+    jac.template block<3, 3>(0, 3) = -j_inv * jacobianCoupling(xi) * j_inv;
+    jac.template block<3, 3>(3, 0).setZero();
+    jac.template block<3, 3>(3, 3) = j_inv;
+    return jac;
+  }
+  // Right Jacobian: exp(xi + d) ~= exp(xi) exp(J_r(xi) d); J_r(xi) = J_l(-xi).
+  static Mat6 rightJacobian(const Vec6& xi) { return leftJacobian(-xi); }
+  static Mat6 rightJacobianInverse(const Vec6& xi) { return leftJacobianInverse(-xi); }
+
   template <typename Other>
   SE3<Other> cast() const {
     return SE3<Other>(rotation_.template cast<Other>(), translation_.template cast<Other>());
   }
 
  private:
+  // Q(upsilon, omega) = 1/2 V + a (WV + VW + WVW) + b (WWV + VWW - 3 WVW) + c (WVWW + WWVW)
+  // with V = upsilon^, W = omega^ (Barfoot, "State Estimation for Robotics", eq. 7.86).
+  static Mat3 jacobianCoupling(const Vec6& xi) {
+    const Mat3 v = SO3<Scalar>::hat(xi.template head<3>());
+    const Mat3 w = SO3<Scalar>::hat(xi.template tail<3>());
+    const lie_detail::HalfAngle<Scalar> angle(xi.template tail<3>().squaredNorm());
+    const Mat3 wv = w * v;
+    const Mat3 vw = v * w;
+    const Mat3 wvw = wv * w;
+    const Mat3 wwv = w * wv;
+    const Mat3 vww = vw * w;
+    return Scalar(0.5) * v + angle.thetaMinusSinOverCube() * (wv + vw + wvw) +
+           angle.se3SecondCoefficient() * (wwv + vww - Scalar(3) * wvw) +
+           angle.se3ThirdCoefficient() * (wvw * w + w * wvw);
+  }
+
   SO3<Scalar> rotation_;
   Vec3 translation_;
 };

@@ -3,7 +3,10 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <cmath>
+
+#include "voca/geometry/lie_coefficients.h"
 
 namespace voca {
 
@@ -18,15 +21,27 @@ class SO3 {
   SO3() : q_(Quaternion::Identity()) {}
   // The quaternion is normalised; callers may pass one that is only approximately unit.
   explicit SO3(const Quaternion& q) : q_(q.normalized()) {}
-  // Projects an approximately orthonormal matrix onto SO(3) (through its quaternion).
-  explicit SO3(const Mat3& rotation) : q_(Quaternion(rotation).normalized()) {}
+  // Projects a matrix onto the nearest rotation (Frobenius norm), so rotations read from text files
+  // with few digits or accumulated in float come back exactly orthonormal.
+  explicit SO3(const Mat3& rotation) : q_(Quaternion(nearestRotation(rotation)).normalized()) {}
 
   static SO3 identity() { return SO3(); }
+  static SO3 fromQuaternion(const Quaternion& q) { return SO3(q); }
+  static SO3 fromMatrix(const Mat3& rotation) { return SO3(rotation); }
+
+  // Nearest rotation matrix to m: U diag(1, 1, det(U V^T)) V^T from the SVD m = U S V^T.
+  static Mat3 nearestRotation(const Mat3& m) {
+    const Eigen::JacobiSVD<Mat3> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Mat3 u = svd.matrixU();
+    const Mat3& v = svd.matrixV();
+    if ((u * v.transpose()).determinant() < Scalar(0)) u.col(2) = -u.col(2);
+    return u * v.transpose();
+  }
 
   static SO3 exp(const Vec3& omega) {
     const Scalar theta_sq = omega.squaredNorm();
     Scalar real, imag_factor;
-    if (theta_sq < smallAngleSquared()) {
+    if (theta_sq < lie_detail::tinyAngleSquared<Scalar>()) {
       // Taylor expansion of cos(theta/2) and sin(theta/2)/theta to keep full precision near 0.
       real = Scalar(1) - theta_sq / Scalar(8);
       imag_factor = Scalar(0.5) - theta_sq / Scalar(48);
@@ -48,7 +63,7 @@ class SO3 {
     const Vec3 imag = q.vec();
     const Scalar n = imag.norm();
     const Scalar w = q.w();
-    if (n < std::sqrt(smallAngleSquared())) {
+    if (n < std::sqrt(lie_detail::tinyAngleSquared<Scalar>())) {
       // theta ~ 2 n / w; the series keeps log(exp(x)) = x to machine precision for small x.
       return (Scalar(2) / w - Scalar(2) * n * n / (Scalar(3) * w * w * w)) * imag;
     }
@@ -71,6 +86,13 @@ class SO3 {
 
   Mat3 matrix() const { return q_.toRotationMatrix(); }
   const Quaternion& unitQuaternion() const { return q_; }
+  void setQuaternion(const Quaternion& q) { q_ = q.normalized(); }
+  // Rotation angle in [0, pi].
+  Scalar angle() const {
+    using std::abs;
+    using std::atan2;
+    return Scalar(2) * atan2(q_.vec().norm(), abs(q_.w()));
+  }
   // The adjoint of SO(3) is the rotation matrix itself: R exp(w) R^T = exp(R w).
   Mat3 adjoint() const { return matrix(); }
 
@@ -84,41 +106,26 @@ class SO3 {
     m << Scalar(0), -v.z(), v.y(), v.z(), Scalar(0), -v.x(), -v.y(), v.x(), Scalar(0);
     return m;
   }
-  static Vec3 vee(const Mat3& m) { return Vec3(m(2, 1), m(0, 2), m(1, 0)); }
+  // Reads the skew-symmetric part, so a slightly non-skew input gives the nearest vector.
+  static Vec3 vee(const Mat3& m) { return Scalar(0.5) * Vec3(m(2, 1) - m(1, 2), m(0, 2) - m(2, 0), m(1, 0) - m(0, 1)); }
 
   // Left Jacobian: exp(w + dw) ~= exp(J_l(w) dw) exp(w).
   static Mat3 leftJacobian(const Vec3& omega) {
-    const Scalar theta_sq = omega.squaredNorm();
+    const lie_detail::HalfAngle<Scalar> a(omega.squaredNorm());
     const Mat3 w_hat = hat(omega);
-    if (theta_sq < smallAngleSquared()) {
-      return Mat3::Identity() + Scalar(0.5) * w_hat + w_hat * w_hat / Scalar(6);
-    }
-    const Scalar theta = std::sqrt(theta_sq);
-    return Mat3::Identity() + (Scalar(1) - std::cos(theta)) / theta_sq * w_hat +
-           (theta - std::sin(theta)) / (theta_sq * theta) * w_hat * w_hat;
+    return Mat3::Identity() + a.oneMinusCosOverSq() * w_hat + a.thetaMinusSinOverCube() * w_hat * w_hat;
   }
+  // Inverse of leftJacobian(omega); singular only at |omega| = 2 pi, beyond the range of log().
   static Mat3 leftJacobianInverse(const Vec3& omega) {
-    const Scalar theta_sq = omega.squaredNorm();
+    const lie_detail::HalfAngle<Scalar> a(omega.squaredNorm());
     const Mat3 w_hat = hat(omega);
-    if (theta_sq < smallAngleSquared()) {
-      return Mat3::Identity() - Scalar(0.5) * w_hat + w_hat * w_hat / Scalar(12);
-    }
-    const Scalar theta = std::sqrt(theta_sq);
-    const Scalar factor =
-        (Scalar(1) - theta * std::sin(theta) / (Scalar(2) * (Scalar(1) - std::cos(theta)))) / theta_sq;
-    return Mat3::Identity() - Scalar(0.5) * w_hat + factor * w_hat * w_hat;
+    return Mat3::Identity() - Scalar(0.5) * w_hat + a.inverseJacobianCoefficient() * w_hat * w_hat;
   }
   // Right Jacobian: exp(w + dw) ~= exp(w) exp(J_r(w) dw); J_r(w) = J_l(-w).
   static Mat3 rightJacobian(const Vec3& omega) { return leftJacobian(-omega); }
   static Mat3 rightJacobianInverse(const Vec3& omega) { return leftJacobianInverse(-omega); }
 
  private:
-  // Below this squared angle the closed forms lose precision and the series are exact to
-  // the scalar's precision.
-  static constexpr Scalar smallAngleSquared() {
-    return sizeof(Scalar) >= sizeof(double) ? Scalar(1e-10) : Scalar(1e-5);
-  }
-
   Quaternion q_;
 };
 
