@@ -1,0 +1,149 @@
+#include "drivers/decode/backend.h"
+
+#include <filesystem>
+
+#include "drivers/decode/ffmpeg_util.h"
+#include "voca/core/error.h"
+
+extern "C" {
+#include <libavutil/hwcontext.h>
+}
+
+namespace voca::decode {
+
+const char* backendName(DecoderBackend backend) {
+  switch (backend) {
+    case DecoderBackend::kAuto:
+      return "auto";
+    case DecoderBackend::kSoftware:
+      return "software";
+    case DecoderBackend::kVaapi:
+      return "vaapi";
+    case DecoderBackend::kV4l2m2m:
+      return "v4l2m2m";
+  }
+  return "?";
+}
+
+DecoderBackend parseBackend(std::string_view text) {
+  for (DecoderBackend b :
+       {DecoderBackend::kAuto, DecoderBackend::kSoftware, DecoderBackend::kVaapi, DecoderBackend::kV4l2m2m}) {
+    if (text == backendName(b)) return b;
+  }
+  throw InputError("decoder backend '" + std::string(text) + "': expected auto, software, vaapi or v4l2m2m");
+}
+
+std::string describeBackend(DecoderBackend backend, bool export_motion) {
+  std::string text = std::string("decoder: ") + backendName(backend);
+  if (backend != DecoderBackend::kSoftware && export_motion) text += " (+ software MV parse)";
+  return text;
+}
+
+BackendChoice selectDecoderBackend(DecoderBackend requested, VideoCodec codec, const std::string& vaapi_device,
+                                   bool export_motion, const DecoderProbe& probe) {
+  BackendChoice choice;
+  auto take = [&](DecoderBackend backend) {
+    choice.backend = backend;
+    choice.description = describeBackend(backend, export_motion);
+    return choice;
+  };
+  if (requested == DecoderBackend::kSoftware) return take(DecoderBackend::kSoftware);
+
+  if (requested == DecoderBackend::kAuto || requested == DecoderBackend::kVaapi) {
+    if (!probe.vaapi_device_present || !probe.vaapi_device_present(vaapi_device)) {
+      choice.notes.push_back("vaapi: no render node " + vaapi_device);
+    } else if (!probe.vaapi_open || !probe.vaapi_open(vaapi_device, codec)) {
+      choice.notes.push_back("vaapi: cannot open " + vaapi_device + " for " + videoCodecName(codec) +
+                             " (driver missing or codec not supported by the GPU)");
+    } else {
+      return take(DecoderBackend::kVaapi);
+    }
+    if (requested == DecoderBackend::kVaapi) {
+      throw InputError("decoder backend vaapi requested but unusable: " + choice.notes.back() +
+                       "; use --decoder software or auto");
+    }
+  }
+  if (requested == DecoderBackend::kAuto || requested == DecoderBackend::kV4l2m2m) {
+    if (probe.v4l2m2m_present && probe.v4l2m2m_present(codec)) return take(DecoderBackend::kV4l2m2m);
+    choice.notes.push_back(std::string("v4l2m2m: no memory-to-memory decoder for ") + videoCodecName(codec));
+    if (requested == DecoderBackend::kV4l2m2m) {
+      throw InputError("decoder backend v4l2m2m requested but unusable: " + choice.notes.back() +
+                       "; use --decoder software or auto");
+    }
+  }
+  return take(DecoderBackend::kSoftware);
+}
+
+namespace detail {
+
+const char* v4l2m2mDecoderName(VideoCodec codec) {
+  switch (codec) {
+    case VideoCodec::kH264:
+      return "h264_v4l2m2m";
+    case VideoCodec::kMpeg4:
+      return "mpeg4_v4l2m2m";
+    case VideoCodec::kMpeg2:
+      return "mpeg2_v4l2m2m";
+    case VideoCodec::kOther:
+      break;
+  }
+  return nullptr;
+}
+
+AVCodecID avCodecId(VideoCodec codec) {
+  switch (codec) {
+    case VideoCodec::kH264:
+      return AV_CODEC_ID_H264;
+    case VideoCodec::kMpeg4:
+      return AV_CODEC_ID_MPEG4;
+    case VideoCodec::kMpeg2:
+      return AV_CODEC_ID_MPEG2VIDEO;
+    case VideoCodec::kOther:
+      break;
+  }
+  return AV_CODEC_ID_NONE;
+}
+
+bool codecSupportsVaapi(const AVCodec* codec) {
+  for (int i = 0;; ++i) {
+    const AVCodecHWConfig* config = avcodec_get_hw_config(codec, i);
+    if (config == nullptr) return false;
+    if ((config->methods & AV_CODEC_HW_CONFIG_METHOD_HW_DEVICE_CTX) != 0 &&
+        config->device_type == AV_HWDEVICE_TYPE_VAAPI) {
+      return true;
+    }
+  }
+}
+
+}  // namespace detail
+
+DecoderProbe systemDecoderProbe() {
+  using detail::avCodecId;
+  using detail::codecSupportsVaapi;
+  using detail::v4l2m2mDecoderName;
+  DecoderProbe probe;
+  probe.vaapi_device_present = [](const std::string& device) {
+    std::error_code ec;
+    return std::filesystem::exists(device, ec);
+  };
+  probe.vaapi_open = [](const std::string& device, VideoCodec codec) {
+    const AVCodec* decoder = avcodec_find_decoder(avCodecId(codec));
+    if (decoder == nullptr || !codecSupportsVaapi(decoder)) return false;
+    AVBufferRef* hw = nullptr;
+    const int rc = av_hwdevice_ctx_create(&hw, AV_HWDEVICE_TYPE_VAAPI, device.c_str(), nullptr, 0);
+    av_buffer_unref(&hw);
+    return rc >= 0;
+  };
+  probe.v4l2m2m_present = [](VideoCodec codec) {
+    const char* name = v4l2m2mDecoderName(codec);
+    if (name == nullptr || avcodec_find_decoder_by_name(name) == nullptr) return false;
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator("/dev", ec)) {
+      if (entry.path().filename().string().rfind("video", 0) == 0) return true;
+    }
+    return false;
+  };
+  return probe;
+}
+
+}  // namespace voca::decode

@@ -1,0 +1,395 @@
+#include "drivers/decode/video_decoder.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <mutex>
+#include <vector>
+
+#include "drivers/decode/ffmpeg_util.h"
+#include "voca/core/error.h"
+
+extern "C" {
+#include <libavutil/hwcontext.h>
+#include <libavutil/motion_vector.h>
+#include <libavutil/pixdesc.h>
+}
+
+namespace voca::decode {
+
+using detail::avErrorText;
+
+namespace {
+
+using CodecPtr = std::unique_ptr<AVCodecContext, detail::CodecContextDeleter>;
+using FramePtr = std::unique_ptr<AVFrame, detail::FrameDeleter>;
+using PacketPtr = std::unique_ptr<AVPacket, detail::PacketDeleter>;
+using BufferPtr = std::unique_ptr<AVBufferRef, detail::BufferDeleter>;
+
+// The MV parse runs ahead of a hardware decoder by that decoder's internal queue depth.
+constexpr std::size_t kMotionQueueDepth = 32;
+
+void logChoiceOnce(const std::string& line) {
+  static std::mutex mutex;
+  static std::vector<std::string> logged;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (std::find(logged.begin(), logged.end(), line) != logged.end()) return;
+  logged.push_back(line);
+  std::fprintf(stderr, "%s\n", line.c_str());
+}
+
+PictureType pictureType(AVPictureType type) {
+  switch (type) {
+    case AV_PICTURE_TYPE_I:
+    case AV_PICTURE_TYPE_SI:
+      return PictureType::kI;
+    case AV_PICTURE_TYPE_P:
+    case AV_PICTURE_TYPE_SP:
+      return PictureType::kP;
+    case AV_PICTURE_TYPE_B:
+      return PictureType::kB;
+    default:
+      return PictureType::kUnknown;
+  }
+}
+
+AVPixelFormat pickVaapiFormat(AVCodecContext* /*ctx*/, const AVPixelFormat* formats) {
+  for (const AVPixelFormat* f = formats; *f != AV_PIX_FMT_NONE; ++f) {
+    if (*f == AV_PIX_FMT_VAAPI) return *f;
+  }
+  return AV_PIX_FMT_NONE;
+}
+
+void setExtradata(AVCodecContext* ctx, const StreamInfo& stream) {
+  if (stream.extradata.empty()) return;
+  const std::size_t size = stream.extradata.size();
+  ctx->extradata = static_cast<std::uint8_t*>(av_mallocz(size + AV_INPUT_BUFFER_PADDING_SIZE));
+  if (ctx->extradata == nullptr) throw RuntimeFailure("out of memory copying codec headers");
+  std::memcpy(ctx->extradata, stream.extradata.data(), size);
+  ctx->extradata_size = static_cast<int>(size);
+}
+
+}  // namespace
+
+void DecodedFrame::reserve(int max_width, int max_height) {
+  luma.reserve(max_width, max_height);
+  if (motion.maxWidth() < max_width || motion.maxHeight() < max_height) motion = MotionField(max_width, max_height);
+}
+
+struct VideoDecoder::Impl {
+  StreamInfo stream;
+  DecoderOptions options;
+  std::string source;
+  BackendChoice choice;
+  CodecPtr pixel;   // produces the output frames (software, or the hardware decoder)
+  CodecPtr motion;  // hardware backends only: software parse for the motion vectors
+  BufferPtr hw_device;
+  FramePtr frame, transfer;
+  PacketPtr packet;
+  std::vector<FramePtr> motion_queue;  // ring of parsed MV frames waiting for their pixels
+  std::size_t queue_head = 0, queue_size = 0;
+  std::int64_t frames_out = 0;
+  std::int64_t last_packet = -1;
+
+  CodecPtr openSoftware(bool motion_only) const;
+  CodecPtr openVaapi();
+  CodecPtr openV4l2m2m() const;
+  void open(DecoderBackend backend);
+  void sendTo(AVCodecContext* ctx, const AVPacket* pkt, std::int64_t index);
+  void drainMotion();
+  void fail(int rc, const std::string& what) const;
+  void convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out);
+};
+
+void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
+  if (rc == AVERROR_INVALIDDATA || rc == AVERROR_BUG || rc == AVERROR_PATCHWELCOME) {
+    throw InputError(source + ": corrupt bitstream " + what + " (" + avErrorText(rc) + ")");
+  }
+  throw RuntimeFailure(source + ": decoder failure " + what + " (" + avErrorText(rc) + ")");
+}
+
+CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
+  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
+  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
+  CodecPtr ctx(avcodec_alloc_context3(codec));
+  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
+  ctx->width = stream.width;
+  ctx->height = stream.height;
+  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
+  setExtradata(ctx.get(), stream);
+  // One thread, slice threading only: frame threading delays output and costs memory per thread.
+  ctx->thread_count = 1;
+  ctx->thread_type = FF_THREAD_SLICE;
+  if (options.export_motion || motion_only) ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
+  // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
+  if (motion_only) ctx->skip_loop_filter = AVDISCARD_ALL;
+  if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
+  const int rc = avcodec_open2(ctx.get(), codec, nullptr);
+  if (rc < 0)
+    throw RuntimeFailure(source + ": cannot open the " + stream.codec_name + " decoder (" + avErrorText(rc) + ")");
+  return ctx;
+}
+
+CodecPtr VideoDecoder::Impl::openVaapi() {
+  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
+  if (codec == nullptr || !detail::codecSupportsVaapi(codec)) {
+    throw RuntimeFailure(source + ": libavcodec cannot decode " + stream.codec_name + " with VAAPI");
+  }
+  AVBufferRef* device = nullptr;
+  int rc = av_hwdevice_ctx_create(&device, AV_HWDEVICE_TYPE_VAAPI, options.vaapi_device.c_str(), nullptr, 0);
+  if (rc < 0) {
+    throw RuntimeFailure("cannot open VAAPI device " + options.vaapi_device + " (" + avErrorText(rc) + ")");
+  }
+  hw_device.reset(device);
+  CodecPtr ctx(avcodec_alloc_context3(codec));
+  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
+  ctx->width = stream.width;
+  ctx->height = stream.height;
+  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
+  setExtradata(ctx.get(), stream);
+  ctx->hw_device_ctx = av_buffer_ref(hw_device.get());
+  ctx->get_format = pickVaapiFormat;
+  ctx->thread_count = 1;
+  if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
+  rc = avcodec_open2(ctx.get(), codec, nullptr);
+  if (rc < 0) throw RuntimeFailure(source + ": cannot open the VAAPI decoder (" + avErrorText(rc) + ")");
+  return ctx;
+}
+
+CodecPtr VideoDecoder::Impl::openV4l2m2m() const {
+  const char* name = detail::v4l2m2mDecoderName(stream.codec);
+  const AVCodec* codec = name == nullptr ? nullptr : avcodec_find_decoder_by_name(name);
+  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no V4L2 M2M decoder for " + stream.codec_name);
+  CodecPtr ctx(avcodec_alloc_context3(codec));
+  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
+  ctx->width = stream.width;
+  ctx->height = stream.height;
+  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
+  setExtradata(ctx.get(), stream);
+  const int rc = avcodec_open2(ctx.get(), codec, nullptr);
+  if (rc < 0) {
+    throw RuntimeFailure(source + ": cannot open " + name + " (" + avErrorText(rc) +
+                         "); no V4L2 memory-to-memory decoder device?");
+  }
+  return ctx;
+}
+
+void VideoDecoder::Impl::open(DecoderBackend backend) {
+  pixel.reset();
+  motion.reset();
+  hw_device.reset();
+  if (!options.decode_pixels) {
+    // An MV-only parse is software by nature: hardware would make pixels nobody reads.
+    pixel = openSoftware(true);
+    return;
+  }
+  switch (backend) {
+    case DecoderBackend::kVaapi:
+      pixel = openVaapi();
+      break;
+    case DecoderBackend::kV4l2m2m:
+      pixel = openV4l2m2m();
+      break;
+    default:
+      pixel = openSoftware(false);
+      return;
+  }
+  if (options.export_motion) {
+    motion = openSoftware(true);
+    motion_queue.clear();
+    for (std::size_t i = 0; i < kMotionQueueDepth; ++i) {
+      motion_queue.emplace_back(av_frame_alloc());
+      if (!motion_queue.back()) throw RuntimeFailure("out of memory allocating frames");
+    }
+  }
+}
+
+VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& options, const DecoderProbe* probe,
+                           std::string source_name)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.stream = stream;
+  d.options = options;
+  d.source = std::move(source_name);
+  if (stream.codec == VideoCodec::kOther) {
+    throw InputError(d.source + ": codec '" + stream.codec_name + "' is not supported (H.264, MPEG-4 Part 2, MPEG-2)");
+  }
+  d.frame.reset(av_frame_alloc());
+  d.transfer.reset(av_frame_alloc());
+  d.packet.reset(av_packet_alloc());
+  if (!d.frame || !d.transfer || !d.packet) throw RuntimeFailure("out of memory allocating decoder buffers");
+
+  if (!options.decode_pixels) {
+    d.choice.backend = DecoderBackend::kSoftware;
+    d.choice.description = "decoder: software (MV-only parse)";
+  } else {
+    const DecoderProbe system = probe == nullptr ? systemDecoderProbe() : DecoderProbe{};
+    d.choice = selectDecoderBackend(options.backend, stream.codec, options.vaapi_device, options.export_motion,
+                                    probe == nullptr ? system : *probe);
+  }
+  try {
+    d.open(d.choice.backend);
+  } catch (const RuntimeFailure& e) {
+    // The probe said yes but opening failed after all: auto mode still falls back to software.
+    if (options.backend != DecoderBackend::kAuto || d.choice.backend == DecoderBackend::kSoftware) throw;
+    d.choice.notes.push_back(e.what());
+    d.choice.backend = DecoderBackend::kSoftware;
+    d.choice.description = describeBackend(DecoderBackend::kSoftware, options.export_motion);
+    d.open(DecoderBackend::kSoftware);
+  }
+  if (options.log_choice) logChoiceOnce(d.choice.description);
+}
+
+VideoDecoder::~VideoDecoder() = default;
+
+DecoderBackend VideoDecoder::backend() const { return impl_->choice.backend; }
+const std::string& VideoDecoder::description() const { return impl_->choice.description; }
+const StreamInfo& VideoDecoder::stream() const { return impl_->stream; }
+
+void VideoDecoder::Impl::sendTo(AVCodecContext* ctx, const AVPacket* pkt, std::int64_t index) {
+  const int rc = avcodec_send_packet(ctx, pkt);
+  if (rc == 0 || rc == AVERROR_EOF) return;
+  if (rc == AVERROR(EAGAIN)) {
+    throw RuntimeFailure(source + ": decoder refused packet " + std::to_string(index) +
+                         " (frames were not drained with receive())");
+  }
+  fail(rc, pkt == nullptr ? std::string("while flushing") : "in packet " + std::to_string(index));
+}
+
+void VideoDecoder::Impl::drainMotion() {
+  while (true) {
+    if (queue_size == motion_queue.size()) {
+      throw RuntimeFailure(source + ": the hardware decoder fell more than " + std::to_string(kMotionQueueDepth) +
+                           " frames behind the motion-vector parse");
+    }
+    AVFrame* slot = motion_queue[(queue_head + queue_size) % motion_queue.size()].get();
+    av_frame_unref(slot);
+    const int rc = avcodec_receive_frame(motion.get(), slot);
+    if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
+    if (rc < 0) fail(rc, "in the motion-vector parse near packet " + std::to_string(last_packet));
+    ++queue_size;
+  }
+}
+
+void VideoDecoder::send(const Packet& packet) {
+  Impl& d = *impl_;
+  AVPacket* pkt = d.packet.get();
+  av_packet_unref(pkt);
+  // Not reference-counted: libavcodec copies the bytes into a padded buffer of its own.
+  pkt->data = const_cast<std::uint8_t*>(packet.bytes.data());
+  pkt->size = static_cast<int>(packet.bytes.size());
+  pkt->pts = packet.pts == kNoPts ? AV_NOPTS_VALUE : packet.pts;
+  pkt->dts = packet.dts == kNoPts ? AV_NOPTS_VALUE : packet.dts;
+  pkt->flags = packet.keyframe ? AV_PKT_FLAG_KEY : 0;
+  d.last_packet = packet.index;
+  if (d.motion) {
+    d.drainMotion();
+    d.sendTo(d.motion.get(), pkt, packet.index);
+    d.drainMotion();
+  }
+  d.sendTo(d.pixel.get(), pkt, packet.index);
+  pkt->data = nullptr;
+  pkt->size = 0;
+}
+
+void VideoDecoder::sendEnd() {
+  Impl& d = *impl_;
+  if (d.motion) {
+    d.drainMotion();
+    d.sendTo(d.motion.get(), nullptr, d.last_packet + 1);
+    d.drainMotion();
+  }
+  d.sendTo(d.pixel.get(), nullptr, d.last_packet + 1);
+}
+
+void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
+  const int width = pixels.width, height = pixels.height;
+  out.type = pictureType(pixels.pict_type);
+  out.frame_index = frames_out;
+  const std::int64_t pts = pixels.best_effort_timestamp != AV_NOPTS_VALUE ? pixels.best_effort_timestamp : pixels.pts;
+  out.pts = pts == AV_NOPTS_VALUE ? kNoPts : pts;
+  out.t_ns = out.pts == kNoPts ? 0
+                               : av_rescale_q(out.pts, AVRational{stream.time_base_num, stream.time_base_den},
+                                              AVRational{1, 1000000000});
+
+  if (options.decode_pixels) {
+    const AVFrame* plane = &pixels;
+    if (pixels.format == AV_PIX_FMT_VAAPI) {
+      av_frame_unref(transfer.get());
+      const int rc = av_hwframe_transfer_data(transfer.get(), &pixels, 0);
+      if (rc < 0) fail(rc, "transferring frame " + std::to_string(frames_out) + " from the GPU");
+      plane = transfer.get();
+    }
+    const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(static_cast<AVPixelFormat>(plane->format));
+    // Every planar/semi-planar YUV format starts with an 8-bit Y plane, which is all we need.
+    if (desc == nullptr || (desc->flags & (AV_PIX_FMT_FLAG_HWACCEL | AV_PIX_FMT_FLAG_RGB | AV_PIX_FMT_FLAG_PAL)) != 0 ||
+        desc->comp[0].depth != 8) {
+      throw RuntimeFailure(source + ": decoder produced pixel format " +
+                           (desc == nullptr ? std::string("?") : std::string(desc->name)) + ", expected 8-bit YUV");
+    }
+    out.luma.resize(width, height);
+    for (int y = 0; y < height; ++y) {
+      std::memcpy(out.luma.row(y), plane->data[0] + static_cast<std::ptrdiff_t>(y) * plane->linesize[0],
+                  static_cast<std::size_t>(width));
+    }
+  } else {
+    out.luma.resize(0, 0);
+  }
+
+  if (out.motion.maxWidth() < width || out.motion.maxHeight() < height) {
+    out.motion = MotionField(std::max(width, stream.width), std::max(height, stream.height));
+  }
+  out.motion.reset(width, height, out.type);
+  out.motion.setSourceFrame(frames_out);
+  if (options.export_motion || !options.decode_pixels) {
+    const AVFrameSideData* side = av_frame_get_side_data(&vectors, AV_FRAME_DATA_MOTION_VECTORS);
+    if (side != nullptr) {
+      const auto* mvs = reinterpret_cast<const AVMotionVector*>(side->data);
+      const std::size_t count = side->size / sizeof(AVMotionVector);
+      for (std::size_t i = 0; i < count; ++i) {
+        const AVMotionVector& mv = mvs[i];
+        if (mv.motion_scale == 0) continue;
+        // dst is the block centre; the block's content came from dst + motion/scale in the
+        // reference, so the forward flow is the negated vector (DESIGN.md section 4).
+        const float scale = static_cast<float>(mv.motion_scale);
+        out.motion.addBlock(mv.dst_x - mv.w / 2, mv.dst_y - mv.h / 2, mv.w, mv.h,
+                            -static_cast<float>(mv.motion_x) / scale, -static_cast<float>(mv.motion_y) / scale,
+                            mv.source < 0 ? RefDirection::kPast : RefDirection::kFuture);
+      }
+    }
+  }
+  out.motion.finalize();
+  ++frames_out;
+}
+
+bool VideoDecoder::receive(DecodedFrame& out) {
+  Impl& d = *impl_;
+  AVFrame* frame = d.frame.get();
+  av_frame_unref(frame);
+  const int rc = avcodec_receive_frame(d.pixel.get(), frame);
+  if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return false;
+  if (rc < 0) d.fail(rc, "decoding frame " + std::to_string(d.frames_out));
+  if (d.options.strict && (frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT) != 0)) {
+    throw InputError(d.source + ": frame " + std::to_string(d.frames_out) +
+                     " is corrupt (damaged or missing bitstream data)");
+  }
+  const AVFrame* vectors = frame;
+  if (d.motion) {
+    if (d.queue_size == 0) d.drainMotion();
+    if (d.queue_size == 0) {
+      throw RuntimeFailure(d.source + ": frame " + std::to_string(d.frames_out) +
+                           " came out of the hardware decoder before its motion-vector parse");
+    }
+    vectors = d.motion_queue[d.queue_head].get();
+    if (vectors->pts != AV_NOPTS_VALUE && frame->pts != AV_NOPTS_VALUE && vectors->pts != frame->pts) {
+      throw RuntimeFailure(d.source + ": frame " + std::to_string(d.frames_out) +
+                           ": hardware and motion-vector decoders are out of step");
+    }
+    d.queue_head = (d.queue_head + 1) % d.motion_queue.size();
+    --d.queue_size;
+  }
+  d.convert(*frame, *vectors, out);
+  return true;
+}
+
+}  // namespace voca::decode

@@ -1,0 +1,68 @@
+#pragma once
+// Compressed packets -> DecodedFrame (luma plane, picture type, timestamp, motion field).
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "drivers/decode/backend.h"
+#include "drivers/decode/demuxer.h"
+#include "voca/core/image.h"
+#include "voca/motion/motion_field.h"
+
+namespace voca::decode {
+
+// One decoded picture. Buffers are sized for the stream on first use and reused afterwards.
+struct DecodedFrame {
+  GrayImage luma;  // the Y plane as coded (no colour conversion); empty for an MV-only parse
+  PictureType type = PictureType::kUnknown;
+  std::int64_t t_ns = 0;  // dataset timestamp when known (VideoReader), else pts in ns
+  std::int64_t pts = kNoPts;
+  std::int64_t frame_index = 0;  // output order, from 0
+  MotionField motion;            // empty (no vectors) when motion export is off
+
+  // Size the buffers so later frames of at most this size never allocate.
+  void reserve(int max_width, int max_height);
+};
+
+struct DecoderOptions {
+  DecoderBackend backend = DecoderBackend::kAuto;
+  bool export_motion = true;
+  // false: parse only for the motion vectors (software, loop filter skipped, luma left empty).
+  bool decode_pixels = true;
+  std::string vaapi_device = "/dev/dri/renderD128";
+  // Corrupt bitstream data is an error naming the frame instead of being concealed.
+  bool strict = true;
+  bool log_choice = true;  // print the chosen backend to stderr (once per process and description)
+};
+
+// Decodes one video stream on the calling thread. Software decoding uses one thread and no frame
+// threading (frame threading adds a frame of latency and reorders side data); hardware backends
+// decode the pixels while a software context parses the same packets for the motion vectors.
+// Errors throw voca::InputError (corrupt data, naming the packet/frame) or voca::RuntimeFailure.
+class VideoDecoder {
+ public:
+  // probe: how to discover devices; nullptr = systemDecoderProbe(). source_name appears in errors.
+  VideoDecoder(const StreamInfo& stream, const DecoderOptions& options, const DecoderProbe* probe = nullptr,
+               std::string source_name = "video");
+  ~VideoDecoder();
+  VideoDecoder(const VideoDecoder&) = delete;
+  VideoDecoder& operator=(const VideoDecoder&) = delete;
+
+  // Feeds one packet (decode order). Call receive() until it returns false after each send.
+  void send(const Packet& packet);
+  // Signals the end of the stream; receive() then drains the frames held back.
+  void sendEnd();
+  // The next decoded frame, or false when none is ready (or the stream has ended).
+  bool receive(DecodedFrame& frame);
+
+  DecoderBackend backend() const;
+  const std::string& description() const;  // "decoder: software", "decoder: vaapi (+ software MV parse)"
+  const StreamInfo& stream() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace voca::decode
