@@ -113,10 +113,11 @@ Eigen::Quaterniond makeQuaternion(double w, double x, double y, double z, const 
   return q;
 }
 
+// Repeated timestamps occur in real estimates (evo's V102.txt has four); going back in time is an error.
 void requireIncreasing(const Trajectory& trajectory, const Path& path, int line) {
   const std::size_t n = trajectory.poses.size();
-  if (n >= 2 && trajectory.poses[n - 1].t_ns <= trajectory.poses[n - 2].t_ns) {
-    throw InputError(fmt::format("{}: timestamp {} ns is not after the previous row's {} ns", where(path, line),
+  if (n >= 2 && trajectory.poses[n - 1].t_ns < trajectory.poses[n - 2].t_ns) {
+    throw InputError(fmt::format("{}: timestamp {} ns is before the previous row's {} ns", where(path, line),
                                  trajectory.poses[n - 1].t_ns, trajectory.poses[n - 2].t_ns));
   }
 }
@@ -186,6 +187,7 @@ Trajectory parseKitti(const Path& path, const std::vector<Row>& rows, const Path
     }
     const int64_t index = static_cast<int64_t>(trajectory.poses.size());
     trajectory.poses.push_back({index * 1'000'000'000, SE3d(m)});
+    trajectory.raw_matrices.push_back(m);
   }
   trajectory.has_timestamps = false;
   if (!times_path.empty()) {
@@ -314,8 +316,8 @@ std::vector<int64_t> loadTimesFile(const Path& path) {
           fmt::format("{}: expected one time in seconds per line, found {} fields", where(path, row.line), f.size()));
     }
     times.push_back(parseSeconds(f[0], path, row.line));
-    if (times.size() >= 2 && times.back() <= times[times.size() - 2]) {
-      throw InputError(fmt::format("{}: time {} is not after the previous line's", where(path, row.line), f[0]));
+    if (times.size() >= 2 && times.back() < times[times.size() - 2]) {
+      throw InputError(fmt::format("{}: time {} is before the previous line's", where(path, row.line), f[0]));
     }
   }
   return times;

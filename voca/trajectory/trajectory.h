@@ -23,6 +23,11 @@ struct Trajectory {
   // False for KITTI poses read without a times file: t_ns is then the frame index in seconds and
   // the poses can only be paired with another trajectory by index (as evo does for KITTI).
   bool has_timestamps = true;
+  // KITTI only: each row's 3x4 matrix exactly as written. The files keep 7-9 digits, so these are
+  // orthonormal only to ~1e-7, and T_world_body holds their projection onto SE(3); evaluation uses
+  // the matrices as read, as evo does, to reproduce its numbers. Empty for the other formats;
+  // ignored unless it has one entry per pose.
+  std::vector<Eigen::Matrix<double, 3, 4>> raw_matrices;
 };
 
 // TUM: `t tx ty tz qx qy qz qw` in seconds; EuRoC: `t_ns,px,py,pz,qw,qx,qy,qz[,...]` csv;
@@ -39,7 +44,8 @@ TrajectoryFormat detectTrajectoryFormat(const std::filesystem::path& path);
 
 // Reads a trajectory, detecting the format unless one is given. For KITTI, kitti_times (one time
 // in seconds per line, as KITTI's times.txt) supplies the timestamps; without it the poses are
-// indexed by frame (has_timestamps = false). Timestamps must increase strictly. Malformed rows
+// indexed by frame (has_timestamps = false). Timestamps must not decrease (repeats are kept, as
+// evo keeps them). Malformed rows
 // throw InputError with file:line and what was expected.
 Trajectory loadTrajectory(const std::filesystem::path& path, std::optional<TrajectoryFormat> format = {},
                           const std::filesystem::path& kitti_times = {});

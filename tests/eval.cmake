@@ -1,0 +1,1 @@
+voca_add_test(test_eval_evo SOURCES test_eval_evo.cpp LIBS voca_eval LABELS e2e)
