@@ -40,11 +40,20 @@ inline bool invert2x2(const Eigen::Matrix<Scalar, 2, 2>& a, Eigen::Matrix<Scalar
 // fewer than 6 (quadratic convergence from the distorted point as the first guess).
 inline constexpr int kMaxUnprojectIterations = 20;
 
-// Residual accepted as converged: a few rounding errors of evaluating the model at the solution.
+// Newton iterations run until the residual is at the rounding level of evaluating the model
+// (kTight) or stops decreasing; the result is accepted when the residual is below kLoose. Stopping
+// at the loose bound instead would leave errors of ~1e-5 rad in float.
 template <typename Scalar>
-inline Scalar convergenceTolerance(Scalar magnitude) {
+inline Scalar tightTolerance(Scalar magnitude) {
+  return Scalar(2) * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + magnitude);
+}
+template <typename Scalar>
+inline Scalar looseTolerance(Scalar magnitude) {
   return Scalar(32) * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + magnitude);
 }
+
+// Step halvings tried when a Newton step does not reduce the residual.
+inline constexpr int kMaxStepHalvings = 8;
 
 // Largest x in (0, x_end] such that ok(t) holds for every t in (0, x]. Scans with a fixed step and
 // then bisects the first failing interval. Used once at construction to find where a distortion
@@ -189,39 +198,37 @@ class PinholeRadtan8Camera {
   bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
     const Scalar fx = params_[0], fy = params_[1];
     const Vec2 target((uv[0] - params_[2]) / fx, (uv[1] - params_[3]) / fy);
-    const Scalar tolerance = camera_detail::convergenceTolerance<Scalar>(target.norm());
     Vec2 m = target;
     Vec2 distorted;
     Mat22 jacobian;
     distort(m, distorted, &jacobian, nullptr);
     Vec2 residual = distorted - target;
-    bool converged = false;
+    const Scalar tight = camera_detail::tightTolerance<Scalar>(target.norm());
     for (int iteration = 0; iteration < camera_detail::kMaxUnprojectIterations; ++iteration) {
-      if (residual.norm() <= tolerance) {
-        converged = true;
-        break;
-      }
+      if (residual.norm() <= tight) break;
       Mat22 inverse;
       if (!camera_detail::invert2x2<Scalar>(jacobian, inverse)) return false;
       Vec2 step = -inverse * residual;
-      // Backtracking keeps a far-off first guess from jumping past the monotonic region.
-      for (int halving = 0; halving < 10; ++halving) {
+      // Halving keeps a far-off first guess from jumping past the monotonic region; no decrease
+      // even for tiny steps means the residual is at its rounding floor.
+      bool improved = false;
+      for (int halving = 0; halving <= camera_detail::kMaxStepHalvings && !improved; ++halving, step *= Scalar(0.5)) {
         const Vec2 candidate = m + step;
         Vec2 candidate_distorted;
         Mat22 candidate_jacobian;
         distort(candidate, candidate_distorted, &candidate_jacobian, nullptr);
         const Vec2 candidate_residual = candidate_distorted - target;
-        if (candidate_residual.norm() < residual.norm() || halving == 9) {
+        if (candidate_residual.norm() < residual.norm()) {
           m = candidate;
           jacobian = candidate_jacobian;
           residual = candidate_residual;
-          break;
+          improved = true;
         }
-        step *= Scalar(0.5);
       }
+      if (!improved) break;
     }
-    if (!converged && residual.norm() <= tolerance) converged = true;
-    if (!converged || !(m.squaredNorm() <= max_radius_ * max_radius_)) return false;
+    if (!(residual.norm() <= camera_detail::looseTolerance<Scalar>(target.norm()))) return false;
+    if (!(m.squaredNorm() <= max_radius_ * max_radius_)) return false;
 
     const Vec3 ray(m[0], m[1], Scalar(1));
     Eigen::Matrix<Scalar, 3, 3> d_b_d_ray;
@@ -408,22 +415,30 @@ class KannalaBrandt4Camera {
       // d(theta) = theta + O(theta^3): the pinhole bearing is exact to rounding here.
       return PinholeCamera<Scalar>(params_.template head<4>()).unproject(uv, bearing, d_bearing_d_uv);
     }
-    const Scalar tolerance = camera_detail::convergenceTolerance<Scalar>(ru);
-    if (!(ru <= max_distorted_ + tolerance)) return false;
+    const Scalar loose = camera_detail::looseTolerance<Scalar>(ru);
+    if (!(ru <= max_distorted_ + loose)) return false;
     Scalar theta = std::min(ru, max_theta_);
-    Scalar d_prime = Scalar(1);
-    bool converged = false;
-    for (int iteration = 0; iteration <= camera_detail::kMaxUnprojectIterations; ++iteration) {
-      const Scalar residual = distortion(theta) - ru;
-      d_prime = distortionDerivative(theta);
-      if (std::abs(residual) <= tolerance) {
-        converged = true;
-        break;
+    Scalar residual = distortion(theta) - ru;
+    const Scalar tight = camera_detail::tightTolerance<Scalar>(ru);
+    for (int iteration = 0; iteration < camera_detail::kMaxUnprojectIterations; ++iteration) {
+      if (std::abs(residual) <= tight) break;
+      const Scalar slope = distortionDerivative(theta);
+      if (!(slope > Scalar(0))) break;
+      Scalar step = -residual / slope;
+      bool improved = false;
+      for (int halving = 0; halving <= camera_detail::kMaxStepHalvings && !improved; ++halving, step *= Scalar(0.5)) {
+        const Scalar candidate = std::clamp(theta + step, Scalar(0), max_theta_);
+        const Scalar candidate_residual = distortion(candidate) - ru;
+        if (std::abs(candidate_residual) < std::abs(residual)) {
+          theta = candidate;
+          residual = candidate_residual;
+          improved = true;
+        }
       }
-      if (iteration == camera_detail::kMaxUnprojectIterations || !(d_prime > Scalar(0))) break;
-      theta = std::clamp(theta - residual / d_prime, Scalar(0), max_theta_);
+      if (!improved) break;
     }
-    if (!converged) return false;
+    if (!(std::abs(residual) <= loose)) return false;
+    const Scalar d_prime = distortionDerivative(theta);
     const Scalar sin_theta = std::sin(theta), cos_theta = std::cos(theta);
     const Scalar g = sin_theta / ru;
     bearing << g * mx, g * my, cos_theta;
