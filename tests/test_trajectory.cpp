@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <fstream>
+#include <numbers>
 #include <random>
 
 #include "tests/test_support.h"
@@ -146,4 +147,18 @@ TEST_CASE("interpolatePose: exact at samples, linear and slerp between, nullopt 
   CHECK((quarter->translation() - Eigen::Vector3d(0.5, 1.0, 1.5)).norm() < 1e-15);
   // Slerp of a rotation about one axis is the proportional angle about that axis.
   CHECK((quarter->so3().log() - Eigen::Vector3d(0, 0, 0.25)).norm() < 1e-14);
+}
+
+TEST_CASE("changeBodyFrame moves every pose by the same body-frame transform") {
+  Trajectory trajectory;
+  trajectory.poses.push_back(
+      {0, SE3d(voca::SO3d::exp(Eigen::Vector3d(0, 0, std::numbers::pi / 2)), Eigen::Vector3d(1, 0, 0))});
+  trajectory.raw_matrices.push_back(trajectory.poses[0].T_world_body.matrix3x4());
+  const SE3d T_body_cam(voca::SO3d::identity(), Eigen::Vector3d(0.5, 0, 0));
+  const Trajectory cam = voca::changeBodyFrame(trajectory, T_body_cam);
+  // The camera sits 0.5 m along body x, which the 90 degree yaw turns into world y.
+  CHECK((cam.poses[0].T_world_body.translation() - Eigen::Vector3d(1, 0.5, 0)).norm() < 1e-15);
+  CHECK(cam.raw_matrices.empty());  // the rows as read no longer describe these poses
+  const Trajectory back = voca::changeBodyFrame(cam, T_body_cam.inverse());
+  CHECK((back.poses[0].T_world_body.matrix() - trajectory.poses[0].T_world_body.matrix()).norm() < 1e-15);
 }

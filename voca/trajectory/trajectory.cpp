@@ -384,6 +384,14 @@ void saveTrajectory(const Trajectory& trajectory, const Path& path, TrajectoryFo
   if (!out) throw InputError(fmt::format("error writing trajectory file {}", path.string()));
 }
 
+Trajectory changeBodyFrame(const Trajectory& trajectory, const SE3d& T_body_new) {
+  Trajectory out;
+  out.has_timestamps = trajectory.has_timestamps;
+  out.poses.reserve(trajectory.poses.size());
+  for (const TimedPose& pose : trajectory.poses) out.poses.push_back({pose.t_ns, pose.T_world_body * T_body_new});
+  return out;
+}
+
 std::optional<SE3d> interpolatePose(const Trajectory& trajectory, int64_t t_ns) {
   const std::vector<TimedPose>& poses = trajectory.poses;
   if (poses.empty() || t_ns < poses.front().t_ns || t_ns > poses.back().t_ns) return std::nullopt;

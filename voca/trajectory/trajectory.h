@@ -61,6 +61,10 @@ void saveTrajectory(const Trajectory& trajectory, const std::filesystem::path& p
 // nullopt outside [first, last] or for an empty trajectory. Poses must be sorted by time.
 std::optional<SE3d> interpolatePose(const Trajectory& trajectory, int64_t t_ns);
 
+// The same motion described by another body frame: T_world_new = T_world_body * T_body_new for
+// every pose (e.g. T_body_new = T_body_cam0 turns body poses into cam0 poses). Drops raw_matrices.
+Trajectory changeBodyFrame(const Trajectory& trajectory, const SE3d& T_body_new);
+
 // Parses a decimal number of seconds ("12.5", "1.403715529112143517e+09") exactly into integer
 // nanoseconds, rounding half away from zero below 1 ns. nullopt if the text is not a number or
 // overflows int64.
