@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# Prepares a Debian 12 amd64 machine to cross-build VOCA-RT for ARM and run its unit tests under
+# qemu-user: Debian's cross compiler, qemu-user-static, and the ARM builds of our -dev packages
+# installed beside the amd64 ones (multiarch). Idempotent: when everything is present it only
+# checks and returns. Run as root, or as a user with sudo.
+#
+#   bash tools/cross-setup.sh [aarch64|armhf]      (default aarch64)
+#
+# It refuses to go on if apt would remove any installed package: the ARM -dev packages must
+# co-install with the native ones (Multi-Arch: same), they must never replace them.
+set -euo pipefail
+
+target="${1:-aarch64}"
+case "$target" in
+  aarch64) arch=arm64 triplet=aarch64-linux-gnu ;;
+  armhf) arch=armhf triplet=arm-linux-gnueabihf ;;
+  *) echo "cross-setup: unknown target '$target' (expected aarch64 or armhf)" >&2; exit 1 ;;
+esac
+
+# The ARM counterparts of the compiled -dev packages in tools/setup.sh. Header-only and arch:all
+# packages (Eigen, nlohmann-json, CLI11, doctest, the queues) serve every architecture as they are.
+# libva/libdrm/libcamera feed optional drivers; they are installed so CI cross-builds those too.
+dev_packages=(
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libx264-dev
+  libva-dev libdrm-dev libcamera-dev
+  libfmt-dev libpng-dev
+)
+# Debian 12's libyaml-cpp-dev is not Multi-Arch: same, so its ARM build cannot be installed beside
+# the amd64 one. We install the ARM runtime library with apt and unpack the ARM -dev package (CMake
+# config, headers, .so link) into a private overlay that the toolchain file searches first.
+overlay_dev=libyaml-cpp-dev
+overlay_runtime=libyaml-cpp0.7
+overlay_root="${VOCA_CROSS_OVERLAY:-/opt/voca-cross}/$triplet"
+
+packages=("g++-$triplet" qemu-user-static "$overlay_runtime:$arch")
+for p in "${dev_packages[@]}"; do packages+=("$p:$arch"); done
+
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+
+sudo=""
+as_root() {
+  if [ "$(id -u)" -ne 0 ] && [ -z "$sudo" ]; then
+    command -v sudo >/dev/null || { echo "cross-setup: need root (or sudo) for: $*" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  $sudo "$@"
+}
+
+missing=()
+for p in "${packages[@]}"; do installed "$p" || missing+=("$p"); done
+runtime_version=$(dpkg-query -W -f='${Version}' "$overlay_runtime:$arch" 2>/dev/null || true)
+overlay_ok=0
+if [ -n "$runtime_version" ] && [ "$(cat "$overlay_root/.voca-overlay" 2>/dev/null)" = "$overlay_dev $runtime_version" ]; then
+  overlay_ok=1
+fi
+
+if [ ${#missing[@]} -eq 0 ] && [ $overlay_ok -eq 1 ]; then
+  echo "cross-setup: $target: all ${#packages[@]} packages and the $overlay_dev overlay present"
+  exit 0
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+if [ ${#missing[@]} -gt 0 ]; then
+  if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
+    echo "cross-setup: adding dpkg architecture $arch"
+    as_root dpkg --add-architecture "$arch"
+  fi
+  as_root apt-get update -qq
+  # Dry run first: a version skew between the native and ARM -dev packages, or a package that is
+  # not Multi-Arch: same, shows up as a removal. Upgrades of native packages to the ARM ones'
+  # version are expected (Multi-Arch: same needs identical versions) and are allowed.
+  plan=$(as_root apt-get install -s --no-install-recommends "${missing[@]}")
+  removals=$(printf '%s\n' "$plan" | sed -n 's/^Remv \([^ ]*\).*/\1/p')
+  if [ -n "$removals" ]; then
+    echo "cross-setup: installing ${missing[*]} would remove: $(echo $removals)" >&2
+    echo "cross-setup: refusing; install the native packages at the same version first (tools/setup.sh)" >&2
+    exit 1
+  fi
+  echo "cross-setup: installing ${missing[*]}"
+  as_root apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  runtime_version=$(dpkg-query -W -f='${Version}' "$overlay_runtime:$arch")
+fi
+
+if [ "$(cat "$overlay_root/.voca-overlay" 2>/dev/null)" != "$overlay_dev $runtime_version" ]; then
+  echo "cross-setup: unpacking $overlay_dev:$arch $runtime_version into $overlay_root"
+  work=$(mktemp -d)
+  chmod 777 "$work"  # apt fetches as its own unprivileged user (_apt)
+  trap 'rm -rf "$work"' EXIT
+  # apt-get download runs as the calling user and writes to the current directory.
+  (cd "$work" && apt-get download -qq "$overlay_dev:$arch=$runtime_version")
+  as_root rm -rf "$overlay_root"
+  as_root mkdir -p "$overlay_root"
+  as_root dpkg-deb -x "$work"/*.deb "$overlay_root"
+  # The -dev package's .so link and CMake config name the runtime library beside them; point those
+  # names at the runtime package's files in the multiarch directory.
+  for f in $(dpkg-query -L "$overlay_runtime:$arch" | grep "^/usr/lib/$triplet/[^/]*\.so"); do
+    as_root ln -sfn "$f" "$overlay_root$f"
+  done
+  echo "$overlay_dev $runtime_version" | as_root tee "$overlay_root/.voca-overlay" >/dev/null
+fi
+echo "cross-setup: $target: done"
