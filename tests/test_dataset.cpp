@@ -26,6 +26,13 @@ std::string errorOf(const fs::path& path) {
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+// Checks that an error message contains the expected part, showing the whole message on failure.
+void expectError(const std::string& error, const std::string& part) {
+  INFO("message: " << error);
+  INFO("expected part: " << part);
+  CHECK(contains(error, part));
+}
+
 voca::GrayImage pattern(int seed) {
   voca::GrayImage image(16, 12);
   for (int y = 0; y < 12; ++y) {
@@ -109,10 +116,10 @@ TEST_CASE("EuRoC rows without images and unpaired timestamps are skipped with wa
       contains(dataset.warnings[0], "cam0/data.csv: 1 of 6 rows have no image file and were skipped (data/5000.png)"));
   CHECK(
       contains(dataset.warnings[1], "cam1/data.csv: 1 of 7 rows have no image file and were skipped (data/3000.png)"));
-  CHECK(contains(dataset.warnings[2], "1 cam0 images have no cam1 image"));
+  expectError(dataset.warnings[2], "1 cam0 images have no cam1 image");
   // cam1's 5000 lost its partner (the left image is gone) and 6500 never had one.
-  CHECK(contains(dataset.warnings[3],
-                 "2 cam1 images have no cam0 image with the same timestamp and were skipped (t_ns 5000, 6500)"));
+  expectError(dataset.warnings[3],
+              "2 cam1 images have no cam0 image with the same timestamp and were skipped (t_ns 5000, 6500)");
 }
 
 TEST_CASE("malformed EuRoC csv lines are errors naming file and line") {
@@ -122,36 +129,36 @@ TEST_CASE("malformed EuRoC csv lines are errors naming file and line") {
   SUBCASE("not a number") {
     writeText(csv, "#timestamp [ns],filename\n1000,1000.png\nabc,2000.png\n");
     const std::string error = errorOf(dir.path());
-    CHECK(contains(error, "cam0/data.csv:3: expected '<timestamp ns>,<image file name>', got 'abc,2000.png'"));
+    expectError(error, "cam0/data.csv:3: expected '<timestamp ns>,<image file name>', got 'abc,2000.png'");
   }
   SUBCASE("no file name") {
     writeText(csv, "#timestamp [ns],filename\n\n1000,1000.png\n2000\n");
-    CHECK(contains(errorOf(dir.path()), "cam0/data.csv:4: expected"));
+    expectError(errorOf(dir.path()), "cam0/data.csv:4: expected");
   }
   SUBCASE("timestamps going back") {
     writeText(csv, "1000,1000.png\n3000,3000.png\n2000,2000.png\n");
-    CHECK(contains(errorOf(dir.path()), "cam0/data.csv:3: timestamp 2000 is not after the previous row's 3000"));
+    expectError(errorOf(dir.path()), "cam0/data.csv:3: timestamp 2000 is not after the previous row's 3000");
   }
   SUBCASE("cam1 csv missing") {
     fs::remove(dir / "mav0/cam1/data.csv");
-    CHECK(contains(errorOf(dir.path()), "cam1/data.csv: missing"));
+    expectError(errorOf(dir.path()), "cam1/data.csv: missing");
   }
   SUBCASE("no image pairs at all") {
     fs::remove_all(dir / "mav0/cam1/data");
-    CHECK(contains(errorOf(dir.path()), "no stereo frame"));
+    expectError(errorOf(dir.path()), "no stereo frame");
   }
 }
 
 TEST_CASE("missing folders and unknown layouts are explained") {
   voca::test::ScratchDir dir("dataset-unknown");
-  CHECK(contains(errorOf(dir / "nope"), "nope: dataset folder not found"));
+  expectError(errorOf(dir / "nope"), "nope: dataset folder not found");
   writeText(dir / "file.txt", "x");
-  CHECK(contains(errorOf(dir / "file.txt"), "not a folder"));
+  expectError(errorOf(dir / "file.txt"), "not a folder");
   fs::create_directories(dir / "empty");
   const std::string error = errorOf(dir / "empty");
-  CHECK(contains(error, "unknown dataset layout"));
-  CHECK(contains(error, "mav0/cam0/data.csv"));
-  CHECK(contains(error, "image_0/"));
+  expectError(error, "unknown dataset layout");
+  expectError(error, "mav0/cam0/data.csv");
+  expectError(error, "image_0/");
 }
 
 TEST_CASE("KITTI sequence folder with ground truth two levels up") {
@@ -180,16 +187,16 @@ TEST_CASE("KITTI sequence folder with ground truth two levels up") {
   CHECK(dataset.frames[2].left.filename() == "000003.png");
   CHECK(dataset.frames[2].right.parent_path().filename() == "image_1");
   REQUIRE(dataset.warnings.size() == 1);
-  CHECK(contains(dataset.warnings[0], "1 of 4 frames lack an image and were skipped (image_1/000002.png)"));
+  expectError(dataset.warnings[0], "1 of 4 frames lack an image and were skipped (image_1/000002.png)");
   REQUIRE(dataset.ground_truth.has_value());
   CHECK(fs::equivalent(*dataset.ground_truth, dir / "poses" / "03.txt"));
   REQUIRE(dataset.calibration.has_value());
   CHECK(dataset.calibration->filename() == "calib.txt");
 
   writeText(seq / "times.txt", "0.0\n0.1\nten\n");
-  CHECK(contains(errorOf(seq), "times.txt:3: expected a time in seconds, got 'ten'"));
+  expectError(errorOf(seq), "times.txt:3: expected a time in seconds, got 'ten'");
   fs::remove_all(seq / "image_1");
-  CHECK(contains(errorOf(seq), "image_1: missing"));
+  expectError(errorOf(seq), "image_1: missing");
 }
 
 TEST_CASE("VOCA video layout lists videos and frame timestamps") {
@@ -212,8 +219,8 @@ TEST_CASE("VOCA video layout lists videos and frame timestamps") {
   const Dataset shorter = voca::openDataset(dir / "mav0");
   CHECK(shorter.frames.size() == 2);
   REQUIRE(shorter.warnings.size() == 1);
-  CHECK(contains(shorter.warnings[0], "using the first 2 frames"));
+  expectError(shorter.warnings[0], "using the first 2 frames");
 
   fs::remove(dir / "mav0/cam1/data.mp4");
-  CHECK(contains(errorOf(dir.path()), "cam1/data.mp4: missing"));
+  expectError(errorOf(dir.path()), "cam1/data.mp4: missing");
 }

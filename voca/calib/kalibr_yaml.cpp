@@ -28,7 +28,7 @@ class Field {
 
   bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
   Field operator[](const std::string& key) const {
-    if (!node_.IsMap()) fail("expected a map of fields");
+    if (!node_.IsMap()) fail("expected a map of fields, got " + describe());
     const YAML::Node child = node_[key];
     const std::string path = path_.empty() ? key : path_ + "." + key;
     if (!child.IsDefined()) {
