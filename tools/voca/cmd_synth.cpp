@@ -1,0 +1,273 @@
+// `voca synth`: renders a synthetic stereo sequence with exact ground truth into a EuRoC folder.
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "drivers/dataset/dataset.h"
+#include "tools/voca/command.h"
+#include "voca/calib/calibration.h"
+#include "voca/core/error.h"
+#include "voca/synth/motion.h"
+#include "voca/synth/rigs.h"
+#include "voca/trajectory/trajectory.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using voca::SE3d;
+
+struct SynthOptions {
+  fs::path out;
+  std::string camera = "euroc";
+  fs::path trajectory;
+  std::string motion = "gentle";
+  std::optional<double> seconds;
+  double rate_hz = 20.0;
+  std::uint64_t seed = 1;
+  std::uint32_t scene_seed = 7;
+  double noise_sigma = 2.0;
+  int supersample = 4;
+  int threads = 2;
+};
+
+// Sequences start at 1 s rather than 0 so that no tool mistakes the first timestamp for "unset".
+constexpr int64_t kStartNs = 1'000'000'000;
+// Minimum distance from the camera path to the walls (the task's requirement) and to objects.
+constexpr double kWallClearanceM = 0.5;
+constexpr double kObjectClearanceM = 0.5;
+
+voca::StereoRig loadRig(const std::string& camera) {
+  if (std::optional<voca::StereoRig> rig = voca::synth::builtinRig(camera)) return *rig;
+  if (!fs::exists(camera)) {
+    throw voca::InputError("--camera '" + camera +
+                           "': expected 'euroc', 'tumvi' or a calibration file/folder (Basalt .json, Kalibr .yaml, "
+                           "EuRoC mav0, KITTI calib.txt)");
+  }
+  voca::StereoRig rig = voca::loadCalibration(camera);
+  if (rig.cameras.size() < 2) throw voca::InputError(camera + ": a stereo calibration needs two cameras");
+  rig.cameras.resize(2);
+  for (const voca::CameraCalibration& c : rig.cameras) {
+    if (c.width <= 0 || c.height <= 0) throw voca::InputError(camera + ": camera resolution missing or invalid");
+  }
+  return rig;
+}
+
+// Largest distance from the body origin to any camera: the clearance the body path needs on top
+// of the cameras' own.
+double rigRadius(const voca::StereoRig& rig) {
+  double radius = 0.0;
+  for (const voca::CameraCalibration& c : rig.cameras) radius = std::max(radius, c.T_body_cam.translation().norm());
+  return radius;
+}
+
+struct Sequence {
+  std::vector<int64_t> t_ns;
+  std::vector<SE3d> T_world_body;
+  voca::synth::RoomBox room;
+};
+
+Sequence presetSequence(const SynthOptions& options, const voca::StereoRig& rig) {
+  const std::optional<voca::synth::MotionPreset> preset = voca::synth::parseMotionPreset(options.motion);
+  if (!preset) {
+    throw voca::InputError("--motion '" + options.motion + "': expected gentle, fast-rotation or aggressive");
+  }
+  Sequence seq;
+  const double seconds = options.seconds.value_or(20.0);
+  const int frames = static_cast<int>(std::floor(seconds * options.rate_hz + 1e-9));
+  const SE3d T_cam0_body = rig.cameras[0].T_body_cam.inverse();
+  // The preset moves cam0; every camera and the body must keep the clearance.
+  const double clearance = kWallClearanceM + 2.0 * rigRadius(rig) + 0.05;
+  for (int k = 0; k < frames; ++k) {
+    const double t = static_cast<double>(k) / options.rate_hz;
+    seq.t_ns.push_back(kStartNs + static_cast<int64_t>(std::llround(t * 1e9)));
+    seq.T_world_body.push_back(voca::synth::presetCameraPose(*preset, t, seq.room, clearance) * T_cam0_body);
+  }
+  return seq;
+}
+
+Sequence fileSequence(const SynthOptions& options, const voca::StereoRig& rig) {
+  const voca::Trajectory trajectory = voca::loadTrajectory(options.trajectory);
+  if (trajectory.poses.size() < 2) throw voca::InputError(options.trajectory.string() + ": needs at least two poses");
+  if (!trajectory.has_timestamps) {
+    throw voca::InputError(options.trajectory.string() +
+                           ": KITTI poses without times; give a trajectory with timestamps (TUM or EuRoC csv)");
+  }
+  Sequence seq;
+  const int64_t t0 = trajectory.poses.front().t_ns;
+  const int64_t t1 = trajectory.poses.back().t_ns;
+  const double period_ns = 1e9 / options.rate_hz;
+  const int64_t limit = options.seconds ? static_cast<int64_t>(std::llround(*options.seconds * options.rate_hz)) : -1;
+  for (int64_t k = 0;; ++k) {
+    if (limit >= 0 && k >= limit) break;
+    const int64_t t = t0 + static_cast<int64_t>(std::llround(static_cast<double>(k) * period_ns));
+    if (t > t1) break;
+    const std::optional<SE3d> pose = voca::interpolatePose(trajectory, t);
+    if (!pose) break;
+    seq.t_ns.push_back(t);
+    seq.T_world_body.push_back(*pose);
+  }
+  if (seq.t_ns.size() < 2) {
+    throw voca::InputError(options.trajectory.string() + ": covers less than two frames at " +
+                           fmt::format("{}", options.rate_hz) + " Hz");
+  }
+  std::vector<Eigen::Vector3d> positions;
+  for (const SE3d& T : seq.T_world_body) positions.push_back(T.translation());
+  const voca::synth::RoomPlacement placement =
+      voca::synth::placeInRoom(positions, voca::synth::RoomBox(), kWallClearanceM + rigRadius(rig) + 0.05);
+  seq.room = placement.room;
+  for (SE3d& T : seq.T_world_body) T.translation() += placement.offset;
+  return seq;
+}
+
+// Renders one camera image with `threads` workers pulling row blocks from a shared counter; the
+// renderer makes every pixel independent of the split, so the bytes do not depend on it.
+void renderImage(const voca::synth::Scene& scene, const voca::synth::RayTable& rays, const SE3d& T_world_cam,
+                 const voca::synth::RenderSettings& settings, voca::GrayImage& image, int threads) {
+  constexpr int kBlockRows = 40;
+  image.resize(rays.width(), rays.height());
+  const voca::ImageView<std::uint8_t> view = image.view();
+  std::atomic<int> next{0};
+  auto work = [&] {
+    for (;;) {
+      const int y0 = next.fetch_add(kBlockRows);
+      if (y0 >= rays.height()) return;
+      voca::synth::renderRows(scene, rays, T_world_cam, settings, view, y0, std::min(y0 + kBlockRows, rays.height()));
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+}
+
+int runSynth(const SynthOptions& options) {
+  if (!(options.rate_hz > 0.0 && options.rate_hz <= 1000.0)) throw voca::InputError("--rate: expected 0 < Hz <= 1000");
+  if (options.seconds && !(*options.seconds > 0.0)) throw voca::InputError("--seconds: expected a positive number");
+  if (!(options.noise_sigma >= 0.0)) throw voca::InputError("--noise-sigma: expected >= 0");
+  if (options.supersample < 1 || options.supersample > 8) throw voca::InputError("--supersample: expected 1..8");
+  if (options.threads < 1) throw voca::InputError("--threads: expected >= 1");
+
+  const auto start = std::chrono::steady_clock::now();
+  const voca::StereoRig rig = loadRig(options.camera);
+  const Sequence seq = options.trajectory.empty() ? presetSequence(options, rig) : fileSequence(options, rig);
+  const int frames = static_cast<int>(seq.t_ns.size());
+  if (frames == 0) throw voca::InputError("--seconds: the sequence has no frames at this rate");
+
+  // Objects stay clear of every camera and of the body along the whole path.
+  std::vector<Eigen::Vector3d> keep_out;
+  for (const SE3d& T : seq.T_world_body) {
+    keep_out.push_back(T.translation());
+    for (const voca::CameraCalibration& c : rig.cameras) keep_out.push_back((T * c.T_body_cam).translation());
+  }
+  voca::synth::SceneConfig scene_config;
+  scene_config.room = seq.room;
+  scene_config.keep_out_m = kObjectClearanceM;
+  const voca::synth::Scene scene = voca::synth::Scene::generate(scene_config, keep_out, options.scene_seed);
+
+  std::vector<voca::synth::RayTable> rays;
+  for (const voca::CameraCalibration& c : rig.cameras) rays.push_back(voca::synth::makeRayTable(c));
+
+  fmt::print(
+      stderr,
+      "voca synth: {} frames at {} Hz, {} {}x{} stereo, room {:.1f} x {:.1f} x {:.1f} m, {} boxes, {} cylinders\n",
+      frames, options.rate_hz, options.camera, rig.cameras[0].width, rig.cameras[0].height,
+      seq.room.max.x() - seq.room.min.x(), seq.room.max.y() - seq.room.min.y(), seq.room.max.z() - seq.room.min.z(),
+      scene.boxes().size(), scene.cylinders().size());
+
+  fs::create_directories(options.out);
+  voca::EurocWriter writer(options.out, 2);
+  std::vector<voca::GrayImage> images(2);
+  auto last_report = std::chrono::steady_clock::now();
+  for (int k = 0; k < frames; ++k) {
+    for (int c = 0; c < 2; ++c) {
+      voca::synth::RenderSettings settings;
+      settings.noise_sigma = static_cast<float>(options.noise_sigma);
+      settings.noise_seed = options.seed;
+      settings.frame_index = static_cast<std::uint64_t>(k);
+      settings.camera_index = c;
+      settings.supersample = options.supersample;
+      renderImage(scene, rays[c], seq.T_world_body[k] * rig.cameras[c].T_body_cam, settings, images[c],
+                  options.threads);
+    }
+    const voca::GrayView views[2] = {images[0].view(), images[1].view()};
+    writer.addFrame(seq.t_ns[k], views);
+    const auto now = std::chrono::steady_clock::now();
+    if (k + 1 == frames || now - last_report > std::chrono::seconds(2)) {
+      const double elapsed = std::chrono::duration<double>(now - start).count();
+      fmt::print(stderr, "\rvoca synth: frame {}/{}  {:.1f} s elapsed, {:.1f} s left   ", k + 1, frames, elapsed,
+                 elapsed / (k + 1) * (frames - k - 1));
+      last_report = now;
+    }
+  }
+  fmt::print(stderr, "\n");
+  writer.finish();
+
+  voca::Trajectory ground_truth;
+  for (int k = 0; k < frames; ++k) ground_truth.poses.push_back({seq.t_ns[k], seq.T_world_body[k]});
+  const fs::path gt_dir = options.out / "mav0" / "state_groundtruth_estimate0";
+  fs::create_directories(gt_dir);
+  voca::saveTrajectory(ground_truth, gt_dir / "data.csv", voca::TrajectoryFormat::kEuroc);
+  voca::saveBasaltCalibration(rig, options.out / "calib.json");
+
+  // Report the true optical flow of cam0 on a coarse grid, so users see what the preset produces.
+  std::vector<SE3d> T_world_cam0;
+  for (const SE3d& T : seq.T_world_body) T_world_cam0.push_back(T * rig.cameras[0].T_body_cam);
+  const voca::CameraCalibration& cam0 = rig.cameras[0];
+  const voca::synth::ImageMotionStats motion = voca::synth::measureImageMotion(
+      scene, rays[0],
+      [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
+        return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width && uv.y() < cam0.height;
+      },
+      T_world_cam0, 32);
+  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  fmt::print(stderr, "voca synth: wrote {} ({} stereo frames, ground truth, calib.json) in {:.1f} s\n",
+             options.out.string(), frames, total);
+  fmt::print(stderr, "voca synth: cam0 image motion per frame: median {:.1f} px, p90 {:.1f} px, max {:.1f} px\n",
+             motion.median_px, motion.p90_px, motion.max_px);
+  return 0;
+}
+
+const bool registered = voca::cli::registerCommand(
+    {.name = "synth",
+     .summary = "Render a synthetic stereo sequence with exact ground truth (EuRoC folder + calib.json)",
+     .order = 10,
+     .configure = [](CLI::App& app) -> voca::cli::Runner {
+       auto options = std::make_shared<SynthOptions>();
+       app.description(
+           "Ray-casts a textured room with objects through a real camera model and writes a EuRoC folder\n"
+           "(mav0/cam0, mav0/cam1), ground truth of the body frame at every frame\n"
+           "(mav0/state_groundtruth_estimate0/data.csv) and the rig as Basalt JSON (<out>/calib.json).\n"
+           "The output is deterministic: the same options give the same bytes.");
+       app.add_option("--out", options->out, "Output folder (created)")->required();
+       app.add_option("--camera", options->camera,
+                      "euroc (pinhole-radtan 752x480), tumvi (kb4 512x512) or a calibration file/folder")
+           ->capture_default_str();
+       app.add_option("--trajectory", options->trajectory,
+                      "Follow this trajectory (TUM, EuRoC csv) instead of a preset; resampled to --rate and "
+                      "re-centred in the room (its z axis is taken as up)");
+       app.add_option("--motion", options->motion, "Motion preset: gentle, fast-rotation or aggressive")
+           ->capture_default_str();
+       app.add_option("--seconds", options->seconds, "Duration (default: 20 s for presets, the whole trajectory file)");
+       app.add_option("--rate", options->rate_hz, "Frame rate, Hz")->capture_default_str();
+       app.add_option("--seed", options->seed, "Seed of the sensor noise")->capture_default_str();
+       app.add_option("--scene-seed", options->scene_seed, "Seed of the room's layout and textures")
+           ->capture_default_str();
+       app.add_option("--noise-sigma", options->noise_sigma, "Gaussian sensor noise, gray levels")
+           ->capture_default_str();
+       app.add_option("--supersample", options->supersample, "n x n samples in pixels crossed by an edge (1..8)")
+           ->capture_default_str();
+       app.add_option("--threads", options->threads, "Rendering threads")->capture_default_str();
+       return [options] { return runSynth(*options); };
+     }});
+
+}  // namespace

@@ -1,0 +1,161 @@
+#include "voca/synth/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace voca::synth {
+
+namespace {
+
+// Grazing surfaces spread a pixel over a long strip; the filter follows the strip's long axis
+// (no aliasing) but is capped so that floors seen at a shallow angle keep some detail.
+constexpr float kMinCosIncidence = 0.15f;
+
+struct CameraPose {
+  Eigen::Matrix3f R;
+  Eigen::Vector3f t;
+};
+
+float sampleRay(const Scene& scene, const CameraPose& pose, const Eigen::Vector3f& bearing, float angle, int* surface) {
+  const Eigen::Vector3f dir = (pose.R * bearing).normalized();
+  Hit hit;
+  if (!scene.intersect(pose.t, dir, hit)) {
+    if (surface != nullptr) *surface = -1;
+    return 0.0f;
+  }
+  if (surface != nullptr) *surface = hit.surface;
+  const float cos_incidence = std::max(std::abs(hit.normal.dot(dir)), kMinCosIncidence);
+  return scene.radiance(hit, hit.t * angle / cos_incidence);
+}
+
+}  // namespace
+
+RayTable::RayTable(int width, int height, const Unproject& unproject)
+    : width_(width),
+      height_(height),
+      bearings_(static_cast<std::size_t>(width) * height, Eigen::Vector3f::Zero()),
+      pixel_angle_(static_cast<std::size_t>(width) * height, 0.0f),
+      valid_(static_cast<std::size_t>(width) * height, 0) {
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      Eigen::Vector3d bearing;
+      if (unproject(Eigen::Vector2d(x, y), bearing) && std::isfinite(bearing.squaredNorm()) &&
+          bearing.squaredNorm() > 0.0) {
+        bearings_[index(x, y)] = bearing.normalized().cast<float>();
+        valid_[index(x, y)] = 1;
+      }
+    }
+  }
+  // The angle between neighbouring pixel rays: the chord of unit vectors equals the angle to
+  // well below a percent at pixel scale.
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (!valid(x, y)) continue;
+      float angle = 0.0f;
+      const int nx = (x + 1 < width && valid(x + 1, y)) ? x + 1 : x - 1;
+      const int ny = (y + 1 < height && valid(x, y + 1)) ? y + 1 : y - 1;
+      if (nx >= 0 && valid(nx, y)) angle = std::max(angle, (bearing(nx, y) - bearing(x, y)).norm());
+      if (ny >= 0 && valid(x, ny)) angle = std::max(angle, (bearing(x, ny) - bearing(x, y)).norm());
+      pixel_angle_[index(x, y)] = angle > 0.0f ? angle : 1e-3f;
+    }
+  }
+}
+
+Eigen::Vector3f RayTable::bearingAt(int x, int y, float dx, float dy) const {
+  const Eigen::Vector3f& b00 = bearing(x, y);
+  // Step towards the offset; at the border (or next to an invalid ray) extrapolate from the other side.
+  int nx = dx >= 0.0f ? x + 1 : x - 1;
+  float fx = std::abs(dx);
+  if (nx < 0 || nx >= width_ || !valid(nx, y)) {
+    nx = 2 * x - nx;
+    fx = -fx;
+  }
+  int ny = dy >= 0.0f ? y + 1 : y - 1;
+  float fy = std::abs(dy);
+  if (ny < 0 || ny >= height_ || !valid(x, ny)) {
+    ny = 2 * y - ny;
+    fy = -fy;
+  }
+  Eigen::Vector3f b = b00;
+  const bool has_x = nx >= 0 && nx < width_ && valid(nx, y);
+  const bool has_y = ny >= 0 && ny < height_ && valid(x, ny);
+  if (has_x) b += fx * (bearing(nx, y) - b00);
+  if (has_y) b += fy * (bearing(x, ny) - b00);
+  if (has_x && has_y && valid(nx, ny)) b += fx * fy * (bearing(nx, ny) - bearing(nx, y) - bearing(x, ny) + b00);
+  return b.normalized();
+}
+
+void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_cam, const RenderSettings& settings,
+                ImageView<std::uint8_t> out, int y_begin, int y_end) {
+  const int width = rays.width();
+  const int height = rays.height();
+  const CameraPose pose{T_world_cam.rotationMatrix().cast<float>(), T_world_cam.translation().cast<float>()};
+
+  // Centre samples for the requested rows and one row either side (needed for edge detection).
+  const int row0 = std::max(y_begin - 1, 0);
+  const int row1 = std::min(y_end + 1, height);
+  const std::size_t rows = static_cast<std::size_t>(std::max(row1 - row0, 0));
+  std::vector<float> value(rows * width, 0.0f);
+  std::vector<int> surface(rows * width, -1);
+  for (int y = row0; y < row1; ++y) {
+    const std::size_t base = static_cast<std::size_t>(y - row0) * width;
+    for (int x = 0; x < width; ++x) {
+      if (!rays.valid(x, y)) {
+        surface[base + x] = -2;
+        continue;
+      }
+      value[base + x] = sampleRay(scene, pose, rays.bearing(x, y), rays.pixelAngle(x, y), &surface[base + x]);
+    }
+  }
+
+  const int n = std::max(settings.supersample, 1);
+  const float inv_n = 1.0f / static_cast<float>(n);
+  const std::uint64_t image_key =
+      hash64(settings.noise_seed ^ hash64(settings.frame_index * 8u +
+                                          static_cast<std::uint64_t>(settings.camera_index) + 0x243f6a8885a308d3ull));
+  for (int y = y_begin; y < y_end; ++y) {
+    const std::size_t base = static_cast<std::size_t>(y - row0) * width;
+    std::uint8_t* out_row = out.row(y);
+    for (int x = 0; x < width; ++x) {
+      const int id = surface[base + x];
+      float v = value[base + x];
+      // A different surface in a 4-neighbour means an edge may cross this pixel: integrate it.
+      bool edge = false;
+      if (x > 0 && surface[base + x - 1] != id) edge = true;
+      if (x + 1 < width && surface[base + x + 1] != id) edge = true;
+      if (y > 0 && surface[base + x - width] != id) edge = true;
+      if (y + 1 < height && surface[base + x + width] != id) edge = true;
+      if (edge && n > 1 && id != -2) {
+        const float angle = rays.pixelAngle(x, y) * inv_n;
+        float sum = 0.0f;
+        for (int sy = 0; sy < n; ++sy) {
+          for (int sx = 0; sx < n; ++sx) {
+            const float dx = (static_cast<float>(sx) + 0.5f) * inv_n - 0.5f;
+            const float dy = (static_cast<float>(sy) + 0.5f) * inv_n - 0.5f;
+            sum += sampleRay(scene, pose, rays.bearingAt(x, y, dx, dy), angle, nullptr);
+          }
+        }
+        v = sum * inv_n * inv_n;
+      }
+      if (id == -2) v = 0.0f;
+      if (settings.noise_sigma > 0.0f) {
+        // Counter-based Gaussian (Box-Muller on a per-pixel hash): independent of the row split.
+        const std::uint64_t h = hash64(image_key + static_cast<std::uint64_t>(y) * width + x);
+        const float u1 = (static_cast<float>(h & 0xffffffu) + 0.5f) * (1.0f / 16777216.0f);
+        const float u2 = static_cast<float>((h >> 32) & 0xffffffu) * (1.0f / 16777216.0f);
+        v += settings.noise_sigma * std::sqrt(-2.0f * std::log(u1)) * std::cos(6.28318531f * u2);
+      }
+      out_row[x] = static_cast<std::uint8_t>(static_cast<int>(std::clamp(v, 0.0f, 255.0f) + 0.5f));
+    }
+  }
+}
+
+float rayDepth(const Scene& scene, const RayTable& rays, const SE3d& T_world_cam, int x, int y) {
+  if (!rays.valid(x, y)) return 0.0f;
+  const Eigen::Vector3f dir = (T_world_cam.rotationMatrix().cast<float>() * rays.bearing(x, y)).normalized();
+  Hit hit;
+  if (!scene.intersect(T_world_cam.translation().cast<float>(), dir, hit)) return 0.0f;
+  return hit.t;
+}
+
+}  // namespace voca::synth
