@@ -1,0 +1,451 @@
+// Frontend unit tests: pyramid, patterns, patch Jacobian and alignment, detector, and the tracker
+// on synthetic textures with known motion, including the codec-prior modes.
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "tests/test_frontend_support.h"
+#include "voca/frontend/detector.h"
+#include "voca/frontend/frontend.h"
+#include "voca/frontend/patch.h"
+#include "voca/frontend/pyramid.h"
+
+using namespace voca;
+using voca::test::WaveTexture;
+
+namespace {
+
+GrayImage renderArbitrary(int width, int height, const std::function<double(double, double)>& f) {
+  GrayImage image(width, height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      image(x, y) = static_cast<std::uint8_t>(std::clamp(std::round(f(x, y)), 0.0, 255.0));
+    }
+  }
+  return image;
+}
+
+// A motion field of 16x16 blocks that all carry the same forward displacement.
+void uniformField(MotionField& field, int width, int height, const Eigen::Vector2f& flow, PictureType type) {
+  field.reset(width, height, type);
+  if (type != PictureType::kI) {
+    for (int y = 0; y < height; y += 16) {
+      for (int x = 0; x < width; x += 16) field.addBlock(x, y, 16, 16, flow.x(), flow.y());
+    }
+  }
+  field.finalize();
+}
+
+}  // namespace
+
+TEST_CASE("pyramid: binomial smoothing keeps linear ramps, so level l samples level 0 at 2^l x") {
+  // A linear function is reproduced exactly by the symmetric [1 4 6 4 1]/16 kernel away from the
+  // replicated border; values are exact in float up to rounding of a few ulps.
+  const int w = 200, h = 120;
+  GrayImage image = renderArbitrary(w, h, [](double x, double y) { return 10.0 + 0.5 * x + 0.25 * y; });
+  // The ramp is rounded to 8 bits at odd coordinates; use only even pixels where it is exact.
+  ImagePyramid pyramid(w, h, 4);
+  pyramid.build(image.view());
+  CHECK(pyramid.level(1).width == 100);
+  CHECK(pyramid.level(3).width == 25);
+  CHECK(pyramid.level(3).height == 15);
+  for (int l = 1; l < 4; ++l) {
+    const FloatView level = pyramid.level(l);
+    const int s = 1 << l;
+    for (int y = 4; y < level.height - 4; ++y) {
+      for (int x = 4; x < level.width - 4; ++x) {
+        // 8-bit rounding of the input: +-0.5 per pixel, averaged by the kernel; bound 0.5.
+        CHECK(std::abs(level(x, y) - (10.0 + 0.5 * s * x + 0.25 * s * y)) <= 0.5);
+      }
+    }
+  }
+  // A constant image stays constant at every level, borders included.
+  GrayImage flat(w, h, 77);
+  pyramid.build(flat.view());
+  for (int l = 0; l < 4; ++l) {
+    const FloatView level = pyramid.level(l);
+    for (int y = 0; y < level.height; ++y)
+      for (int x = 0; x < level.width; ++x) REQUIRE(level(x, y) == doctest::Approx(77.f).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("patterns: 24 and 52 points, symmetric, distinct, on the 2 px grid inside 11x11 and 15x15") {
+  for (const auto& [pattern, half] : {std::pair{&pattern24(), 5.f}, std::pair{&pattern52(), 7.f}}) {
+    float sx = 0.f, sy = 0.f;
+    for (int i = 0; i < pattern->size; ++i) {
+      const float x = pattern->x[static_cast<std::size_t>(i)], y = pattern->y[static_cast<std::size_t>(i)];
+      CHECK(std::abs(x) <= half);
+      CHECK(std::abs(y) <= half);
+      CHECK(std::fmod(std::abs(x), 2.f) == 1.f);
+      sx += x;
+      sy += y;
+      for (int j = 0; j < i; ++j) {
+        CHECK_FALSE((x == pattern->x[static_cast<std::size_t>(j)] && y == pattern->y[static_cast<std::size_t>(j)]));
+      }
+    }
+    CHECK(sx == 0.f);
+    CHECK(sy == 0.f);
+  }
+  CHECK(pattern24().size == 24);
+  CHECK(pattern52().size == 52);
+  CHECK(patternBySize(52) == &pattern52());
+  CHECK(patternBySize(30) == nullptr);
+}
+
+TEST_CASE("patch: analytic Jacobian of the normalised residual matches numerical differentiation") {
+  // Smooth texture (wavelengths 25..80 px): the interpolated central-difference gradient and the
+  // numerical derivative of the bilinear surface then agree to O((2 pi / lambda)^2 / 4) < 2 %;
+  // tolerance 3 % of each Jacobian column's norm.
+  // The image is float (no 8-bit rounding, whose noise would dominate the comparison).
+  const WaveTexture texture(7, 24, 25.0, 80.0, 90.0);
+  FloatImage image(96, 96);
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) image(x, y) = static_cast<float>(texture.at(x, y));
+  const FloatView view = image.view();
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    const Eigen::Vector2f center(47.5f, 40.5f);  // cell centres: finite differences stay inside one cell
+    PatchTemplate tmpl;
+    tmpl.build(view, center, *pattern);
+    REQUIRE(tmpl.valid);
+    const int n = pattern->size;
+    const auto normalised = [&](const Eigen::Vector3f& xi, std::vector<double>& out) {
+      const SE2f warp = SE2f::exp(xi);
+      double sum = 0.0;
+      out.assign(static_cast<std::size_t>(n), 0.0);
+      for (int i = 0; i < n; ++i) {
+        const Eigen::Vector2f q(pattern->x[static_cast<std::size_t>(i)], pattern->y[static_cast<std::size_t>(i)]);
+        const Eigen::Vector2f p = center + warp * q;
+        out[static_cast<std::size_t>(i)] = sampleBilinear(view, p.x(), p.y());
+        sum += out[static_cast<std::size_t>(i)];
+      }
+      for (double& v : out) v *= n / sum;
+    };
+    std::vector<double> base, plus, minus;
+    normalised(Eigen::Vector3f::Zero(), base);
+    for (int i = 0; i < n; ++i)
+      CHECK(tmpl.value[static_cast<std::size_t>(i)] ==
+            doctest::Approx(base[static_cast<std::size_t>(i)]).epsilon(1e-5));
+    const float eps[3] = {0.02f, 0.02f, 0.002f};
+    for (int c = 0; c < 3; ++c) {
+      Eigen::Vector3f d = Eigen::Vector3f::Zero();
+      d[c] = eps[c];
+      normalised(d, plus);
+      normalised(-d, minus);
+      double err2 = 0.0, norm2 = 0.0;
+      for (int i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        const double numeric = (plus[k] - minus[k]) / (2.0 * eps[c]);
+        err2 += (numeric - tmpl.jac[c][k]) * (numeric - tmpl.jac[c][k]);
+        norm2 += numeric * numeric;
+      }
+      INFO("pattern " << n << " column " << c);
+      CHECK(norm2 > 0.0);
+      CHECK(std::sqrt(err2) <= 0.03 * std::sqrt(norm2));
+    }
+    // step = H^-1 J^T: step * J = identity.
+    Eigen::Matrix3d product = Eigen::Matrix3d::Zero();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < n; ++i)
+          product(r, c) += tmpl.step[r][static_cast<std::size_t>(i)] * tmpl.jac[c][static_cast<std::size_t>(i)];
+    CHECK((product - Eigen::Matrix3d::Identity()).norm() < 1e-4);
+  }
+}
+
+TEST_CASE("patch: coarse-to-fine alignment recovers a known shift, rotation and brightness change") {
+  // Amplitude 40 keeps the texture inside 0..255 so the gain below does not clip.
+  const WaveTexture texture(11, 48, 6.0, 60.0, 40.0);
+  const int w = 240, h = 200;
+  const double theta = 0.03;
+  const Eigen::Vector2d c(120.0, 100.0), t(6.3, -4.7);
+  const GrayImage a = renderArbitrary(w, h, [&](double x, double y) { return texture.at(x, y); });
+  // b shows a's content rotated by theta about c, shifted by t, and 20 % darker (the mean
+  // normalisation must absorb a gain).
+  const GrayImage b = renderArbitrary(w, h, [&](double x, double y) {
+    const Eigen::Vector2d q = Eigen::Rotation2Dd(-theta) * (Eigen::Vector2d(x, y) - c - t) + c;
+    return 0.8 * texture.at(q.x(), q.y());
+  });
+  ImagePyramid pa(w, h, 4), pb(w, h, 4);
+  pa.build(a.view());
+  pb.build(b.view());
+  AlignParams params;
+  params.max_iterations = 10;
+  int checked = 0;
+  for (const Eigen::Vector2f& p :
+       {Eigen::Vector2f(90.f, 80.f), Eigen::Vector2f(150.3f, 120.6f), Eigen::Vector2f(120.f, 60.f)}) {
+    SE2f T(0.f, p);
+    REQUIRE(trackPatch(pa, pb, p, pattern52(), params, 4, T) == AlignStatus::kConverged);
+    const Eigen::Vector2d expected = Eigen::Rotation2Dd(theta) * (p.cast<double>() - c) + c + t;
+    // Bilinear interpolation of 6 px wavelengths and 8-bit rounding leave ~0.03 px (measured); bound 0.05.
+    CHECK((T.translation().cast<double>() - expected).norm() < 0.05);
+    CHECK(std::abs(T.angle() - theta) < 0.01);
+    ++checked;
+  }
+  CHECK(checked == 3);
+  // A uniform patch has no texture: the template is rejected rather than producing a NaN.
+  GrayImage flat(w, h, 100);
+  ImagePyramid pf(w, h, 4);
+  pf.build(flat.view());
+  SE2f T(0.f, Eigen::Vector2f(100.f, 100.f));
+  CHECK(trackPatch(pf, pf, Eigen::Vector2f(100.f, 100.f), pattern52(), params, 4, T) == AlignStatus::kTemplateInvalid);
+  // A patch pushed mostly outside the target image is rejected.
+  PatchTemplate tmpl;
+  tmpl.build(pa.level(0), Eigen::Vector2f(100.f, 100.f), pattern52());
+  REQUIRE(tmpl.valid);
+  SE2f outside(0.f, Eigen::Vector2f(-5.f, 100.f));
+  CHECK(alignPatch(pb.level(0), tmpl, pattern52(), params, outside) == AlignStatus::kTooFewPoints);
+}
+
+TEST_CASE("detector: corners of squares, one per empty cell, border, mask and threshold halving") {
+  const int w = 160, h = 120;
+  // Dark squares on bright background: corners at the square corners. One low-contrast square
+  // (difference 12) is only found once the threshold has been halved to 10.
+  GrayImage image(w, h, 200);
+  const auto square = [&](int x0, int y0, int size, std::uint8_t value) {
+    for (int y = y0; y < y0 + size; ++y)
+      for (int x = x0; x < x0 + size; ++x) image(x, y) = value;
+  };
+  square(45, 45, 20, 40);   // cell (1, 1) holds its top-left corner (45, 45)
+  square(85, 45, 20, 188);  // low contrast, top-left corner in cell (2, 1)
+  square(2, 2, 10, 40);     // inside the 19 px border: ignored
+  GridDetector detector(w, h, 40);
+  DetectorParams params;
+  std::vector<Eigen::Vector2f> found;
+  found.reserve(100);
+  detector.detect(image.view(), {}, params, 100, found);
+  std::map<std::pair<int, int>, Eigen::Vector2f> by_cell;
+  for (const auto& p : found) {
+    const auto cell = std::pair{static_cast<int>(p.x()) / 40, static_cast<int>(p.y()) / 40};
+    CHECK(by_cell.count(cell) == 0);  // at most one per cell
+    by_cell[cell] = p;
+    CHECK(p.x() >= 19.f);
+    CHECK(p.y() >= 19.f);
+  }
+  REQUIRE(by_cell.count({1, 1}) == 1);
+  CHECK((by_cell[{1, 1}] - Eigen::Vector2f(45.f, 45.f)).norm() <= 1.5f);
+  REQUIRE(by_cell.count({2, 1}) == 1);
+  CHECK((by_cell[{2, 1}] - Eigen::Vector2f(85.f, 45.f)).norm() <= 1.5f);
+  CHECK(cornerResponse(image.view(), 85, 45, 20) == 0);  // too weak for the first thresholds
+  CHECK(cornerResponse(image.view(), 85, 45, 10) > 0);
+  // An occupied cell is not filled again.
+  found.clear();
+  const std::vector<Eigen::Vector2f> existing = {Eigen::Vector2f(50.f, 50.f)};
+  detector.detect(image.view(), existing, params, 100, found);
+  for (const auto& p : found) CHECK_FALSE((static_cast<int>(p.x()) / 40 == 1 && static_cast<int>(p.y()) / 40 == 1));
+  // The safe-radius mask keeps only corners near its centre.
+  found.clear();
+  params.safe_radius_px = 20.f;
+  params.safe_center = Eigen::Vector2f(90.f, 50.f);
+  detector.detect(image.view(), {}, params, 100, found);
+  REQUIRE(found.size() >= 1);
+  for (const auto& p : found) CHECK((p - params.safe_center).norm() <= 20.f);
+  // max_new limits the count.
+  found.clear();
+  params.safe_radius_px = 0.f;
+  CHECK(detector.detect(image.view(), {}, params, 1, found) == 1);
+}
+
+namespace {
+
+// A fronto-parallel textured plane at depth_m seen by a pinhole stereo pair moving sideways: image
+// content moves by `flow` per frame, the right image is the left shifted by the disparity.
+struct PlaneSequence {
+  static constexpr int kWidth = 320, kHeight = 240;
+  static constexpr double kFocal = 300.0, kBaseline = 0.11, kDepth = 2.0;
+  PlaneSequence(WaveTexture texture_in, const Eigen::Vector2d& flow_in)
+      : texture(std::move(texture_in)), flow(flow_in) {}
+
+  WaveTexture texture;
+  Eigen::Vector2d flow;
+  double disparity = kFocal * kBaseline / kDepth;
+  GrayImage left, right;
+
+  void render(int frame) {
+    const Eigen::Vector2d shift = flow * frame;
+    texture.render(left, kWidth, kHeight, shift.x(), shift.y());
+    texture.render(right, kWidth, kHeight, shift.x() - disparity, shift.y());
+  }
+  FrontendInput input(int frame) const {
+    FrontendInput in;
+    in.images = {left.view(), right.view()};
+    in.t_ns = frame * 50'000'000LL;
+    in.picture_type = PictureType::kP;
+    return in;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("frontend: tracks a translating plane with persistent ids, stereo matches at the true disparity") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kNone;
+  KltFrontend frontend(config, rig, {.max_points = 200});
+  TrackedStereoFrame frame;
+  FrontendStats stats;
+  std::map<std::uint64_t, Eigen::Vector2f> first_seen;  // id -> left position at frame 0
+  std::vector<double> errors;
+  for (int k = 0; k < 6; ++k) {
+    seq.render(k);
+    frontend.track(seq.input(k), frame, stats);
+    CHECK(frame.frame_index == k);
+    if (k == 0) {
+      // 8 x 6 cells minus the border-only ones.
+      CHECK(stats.detected >= 20);
+      for (const auto& o : frame.observations[0]) first_seen[o.track_id] = o.px;
+    } else {
+      CHECK(stats.temporal[0].kept >= stats.temporal[0].previous * 9 / 10);
+    }
+    for (const auto& o : frame.observations[0]) {
+      const auto it = first_seen.find(o.track_id);
+      if (it == first_seen.end()) continue;
+      errors.push_back((o.px.cast<double>() - (it->second.cast<double>() + seq.flow * k)).norm());
+    }
+    // Right observations share the ids of their left points and lie at the disparity.
+    std::map<std::uint64_t, Eigen::Vector2f> left_by_id;
+    for (const auto& o : frame.observations[0]) left_by_id[o.track_id] = o.px;
+    int paired = 0;
+    for (const auto& o : frame.observations[1]) {
+      const auto it = left_by_id.find(o.track_id);
+      if (it == left_by_id.end()) continue;
+      ++paired;
+      CHECK(std::abs(o.px.x() - (it->second.x() - seq.disparity)) < 0.1);
+      CHECK(std::abs(o.px.y() - it->second.y()) < 0.1);
+    }
+    CHECK(paired >= static_cast<int>(frame.observations[0].size()) * 8 / 10);
+    CHECK(stats.epipolar_rejected == 0);
+  }
+  REQUIRE(errors.size() > 100);
+  std::sort(errors.begin(), errors.end());
+  // Drift over 5 frames of 8-bit images: median well below 0.05 px.
+  CHECK(errors[errors.size() / 2] < 0.05);
+  CHECK(errors[errors.size() * 9 / 10] < 0.1);
+}
+
+TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames bridged") {
+  // 40 px/frame is beyond the 4-level pyramid's basin for a 15 px patch at this texture scale.
+  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(40.0, 12.0)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  // Coded vectors are approximate: off by a pixel here.
+  const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.75f, -0.5f);
+  MotionField field_left(seq.kWidth, seq.kHeight), field_right(seq.kWidth, seq.kHeight);
+
+  struct Step {
+    TemporalStats stats;
+    int visible = 0;       // previous points whose true position stays inside the image (patch margin)
+    int correct = 0;       // kept points within 0.1 px of the true position
+    int prior_closer = 0;  // kept points with a vector whose prior guess lies within 1.5 px of the result
+  };
+  const auto run = [&](PriorMode mode, bool bridge, PictureType third_type) {
+    FrontendConfig config;
+    config.prior_mode = mode;
+    config.bridge_iframes = bridge;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    std::array<Step, 3> result{};
+    for (int k = 0; k < 3; ++k) {
+      seq.render(k);
+      FrontendInput in = seq.input(k);
+      const PictureType type = k == 2 ? third_type : PictureType::kP;
+      uniformField(field_left, seq.kWidth, seq.kHeight, coded, type);
+      uniformField(field_right, seq.kWidth, seq.kHeight, coded, type);
+      in.motion = {&field_left, &field_right};
+      in.picture_type = type;
+      frontend.track(in, frame, stats);
+      Step& step = result[static_cast<std::size_t>(k)];
+      step.stats = stats.temporal[0];
+      for (const PointTrace& t : frontend.traces(0)) {
+        const Eigen::Vector2f truth = t.previous_px + flow;
+        step.visible +=
+            truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
+        if (t.kept) step.correct += (t.tracked_px - truth).norm() < 0.1f;
+      }
+      for (std::size_t i = 0; i < stats.guess_dist_prior_px.size(); ++i) {
+        step.prior_closer += stats.guess_dist_prior_px[i] < 1.5f && stats.guess_dist_plain_px[i] > 40.f;
+      }
+    }
+    return result;
+  };
+  const auto none = run(PriorMode::kNone, true, PictureType::kP);
+  REQUIRE(none[1].visible >= 20);
+  CHECK(none[1].stats.kept <= none[1].visible / 4);
+  for (PriorMode mode : {PriorMode::kMv, PriorMode::kOfThenMv, PriorMode::kMvThenOf, PriorMode::kMvParallelOf}) {
+    INFO("mode " << priorModeName(mode));
+    const auto with_prior = run(mode, true, PictureType::kP);
+    // "Most": 80 % of the points that stay in view, at the true position (8-bit texture: 0.1 px).
+    CHECK(with_prior[1].correct >= with_prior[1].visible * 8 / 10);
+    CHECK(with_prior[1].prior_closer >= with_prior[1].correct * 9 / 10);
+    if (mode != PriorMode::kMv) CHECK(with_prior[1].stats.rescued >= with_prior[1].correct * 3 / 4);
+    // of_then_mv keeps whatever the plain track converged to; the others keep few false tracks.
+    if (mode != PriorMode::kOfThenMv) CHECK(with_prior[1].stats.kept - with_prior[1].correct <= 2);
+  }
+  // Frame 2 is an I-frame without vectors: bridged from frame 1's field the prior still works.
+  const auto bridged = run(PriorMode::kMvParallelOf, true, PictureType::kI);
+  CHECK(bridged[2].stats.with_vector == bridged[2].stats.previous);
+  CHECK(bridged[2].correct >= bridged[2].visible * 8 / 10);
+  const auto unbridged = run(PriorMode::kMvParallelOf, false, PictureType::kI);
+  CHECK(unbridged[2].stats.with_vector == 0);
+  CHECK(unbridged[2].correct <= unbridged[2].visible / 4);
+}
+
+TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by the consensus check") {
+  // On a texture with period 24 px, a vector off by one period leads the prior track to an equally
+  // good match 24 px away; forward-backward cannot see it (the backward track starts from the
+  // negated prior), only the disagreement with the plain track does.
+  PlaneSequence seq{WaveTexture::periodic(9, 24), Eigen::Vector2d(1.2, 0.6)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f wrong = seq.flow.cast<float>() + Eigen::Vector2f(24.f, 0.f);
+  MotionField field(seq.kWidth, seq.kHeight);
+  uniformField(field, seq.kWidth, seq.kHeight, wrong, PictureType::kP);
+  std::map<PriorMode, TemporalStats> result;
+  for (PriorMode mode : {PriorMode::kMv, PriorMode::kMvParallelOf}) {
+    FrontendConfig config;
+    config.prior_mode = mode;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    for (int k = 0; k < 2; ++k) {
+      seq.render(k);
+      FrontendInput in = seq.input(k);
+      in.motion = {&field, &field};
+      frontend.track(in, frame, stats);
+    }
+    result[mode] = stats.temporal[0];
+    if (mode == PriorMode::kMvParallelOf) {
+      for (const PointTrace& t : frontend.traces(0)) {
+        if (t.kept) CHECK((t.tracked_px - t.previous_px - seq.flow.cast<float>()).norm() < 0.1f);
+      }
+    }
+  }
+  const TemporalStats& mv = result[PriorMode::kMv];
+  const TemporalStats& parallel = result[PriorMode::kMvParallelOf];
+  REQUIRE(mv.previous >= 15);
+  // MV alone keeps most points, at the wrong copy of the pattern.
+  CHECK(mv.kept >= mv.previous / 2);
+  // In parallel, the wrong-copy matches are rejected by consensus.
+  CHECK(parallel.consensus_rejections >= parallel.previous / 2);
+  CHECK(parallel.rescued == 0);
+}
+
+TEST_CASE("frontend: constructor and inputs are checked") {
+  const StereoRig rig = voca::test::pinholeRig(320, 240, 300.0, 0.1);
+  FrontendConfig config;
+  config.pattern = 30;
+  CHECK_THROWS_AS(KltFrontend(config, rig), InputError);
+  StereoRig mono = rig;
+  mono.cameras.pop_back();
+  CHECK_THROWS_AS(KltFrontend(FrontendConfig{}, mono), InputError);
+  KltFrontend frontend(FrontendConfig{}, rig);
+  GrayImage small(100, 100, 0);
+  FrontendInput in;
+  in.images = {small.view(), small.view()};
+  TrackedStereoFrame frame;
+  FrontendStats stats;
+  CHECK_THROWS_AS(frontend.track(in, frame, stats), InputError);
+}

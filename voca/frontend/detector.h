@@ -1,0 +1,48 @@
+#pragma once
+// Grid-based corner detection with a FAST-style segment test (our own; no OpenCV): at most one new
+// corner per empty grid cell, the strongest one, with the threshold halved until one is found.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "voca/core/image.h"
+
+namespace voca {
+
+struct DetectorParams {
+  int grid_size_px = 40;
+  int max_threshold = 40;  // first segment-test threshold (gray levels); halved down to min_threshold
+  int min_threshold = 5;
+  int border_px = 19;  // corners closer than this to the image border are not taken
+  // Only corners within this distance of safe_center are taken (fisheye rims); 0 = no mask.
+  float safe_radius_px = 0.f;
+  Eigen::Vector2f safe_center = Eigen::Vector2f::Zero();
+};
+
+// Segment test on the 16-pixel Bresenham circle of radius 3: a corner has 9 contiguous circle pixels
+// all brighter than centre + threshold or all darker than centre - threshold. Returns the response
+// (sum of the excess over the threshold along the circle in the winning direction), 0 = no corner.
+// (x, y) must be at least 3 pixels inside the image.
+int cornerResponse(GrayView image, int x, int y, int threshold);
+
+// Fills empty grid cells of an image with corners. Cell (i, j) covers pixels [i g, (i+1) g) x
+// [j g, (j+1) g); a cell is empty when no existing point rounds into it. Buffers are sized for the
+// largest image at construction; detect() does not allocate.
+class GridDetector {
+ public:
+  GridDetector() = default;
+  GridDetector(int max_width, int max_height, int grid_size_px);
+
+  // Appends at most max_new corners (pixel coordinates) to `out`; returns how many were added.
+  // `out` must have capacity for them (reserve once) so that appending does not allocate.
+  int detect(GrayView image, std::span<const Eigen::Vector2f> existing, const DetectorParams& params, int max_new,
+             std::vector<Eigen::Vector2f>& out);
+
+ private:
+  int grid_size_px_ = 0;
+  std::vector<std::uint8_t> occupied_;
+};
+
+}  // namespace voca

@@ -1,0 +1,322 @@
+#include "voca/frontend/frontend.h"
+
+#include <fmt/core.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "voca/core/error.h"
+
+namespace voca {
+
+void FrontendStats::reserve(std::size_t max_points) {
+  guess_dist_plain_px.reserve(2 * max_points);
+  guess_dist_prior_px.reserve(2 * max_points);
+}
+
+void FrontendStats::clear() {
+  temporal = {};
+  bridged = {false, false};
+  detected = stereo_matched = epipolar_rejected = num_left = num_right = 0;
+  guess_dist_plain_px.clear();
+  guess_dist_prior_px.clear();
+  time_ms = 0.0;
+}
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+}  // namespace
+
+KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities)
+    : config_(config) {
+  validateFrontendConfig(config_);
+  if (rig.cameras.size() < 2) {
+    throw InputError(
+        fmt::format("{}: the frontend needs a stereo calibration (2 cameras), got {}", rig.source, rig.cameras.size()));
+  }
+  pattern_ = patternBySize(config_.pattern);
+  num_levels_ = config_.pyramid_levels + 1;
+  align_.max_iterations = config_.max_iterations;
+  max_points_ = capacities.max_points;
+  if (max_points_ < 1) throw InputError("frontend capacity: max_points must be at least 1");
+  width_ = rig.cameras[0].width;
+  height_ = rig.cameras[0].height;
+  const int max_width = std::max({capacities.max_width, rig.cameras[0].width, rig.cameras[1].width});
+  const int max_height = std::max({capacities.max_height, rig.cameras[0].height, rig.cameras[1].height});
+  if (max_width <= 0 || max_height <= 0) throw InputError("frontend capacity: unknown image size");
+
+  for (int c = 0; c < 2; ++c) {
+    cameras_model_[static_cast<std::size_t>(c)] = rig.cameras[static_cast<std::size_t>(c)].camera;
+    CameraState& cam = cameras_[static_cast<std::size_t>(c)];
+    for (ImagePyramid& pyramid : cam.pyramids) pyramid = ImagePyramid(max_width, max_height, num_levels_);
+    for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
+    cam.traces.reserve(static_cast<std::size_t>(max_points_));
+    cam.last_p_frame = MotionField(max_width, max_height);
+  }
+  const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
+  T_cam1_cam0_ = T_cam0_cam1.inverse();
+  // f0 ~ R f1 + t up to depth; f0 . (t x R f1) = 0. t normalised so the threshold is scale-free.
+  const Eigen::Vector3d t = T_cam0_cam1.translation();
+  essential_ = skew(t.norm() > 0.0 ? Eigen::Vector3d(t.normalized()) : t) * T_cam0_cam1.rotationMatrix();
+  average_depth_m_ = config_.matching_default_depth_m;
+
+  detector_params_.grid_size_px = config_.grid_size_px;
+  detector_params_.max_threshold = config_.detection_max_threshold;
+  detector_params_.min_threshold = config_.detection_min_threshold;
+  detector_params_.border_px = config_.detection_border_px;
+  detector_params_.safe_radius_px = static_cast<float>(config_.image_safe_radius_px);
+  const std::vector<double> intrinsics = rig.cameras[0].camera.params();  // every model starts fx fy cx cy
+  detector_params_.safe_center = Eigen::Vector2f(static_cast<float>(intrinsics[2]), static_cast<float>(intrinsics[3]));
+  detector_ = GridDetector(max_width, max_height, config_.grid_size_px);
+  new_points_.reserve(static_cast<std::size_t>(max_points_));
+}
+
+void KltFrontend::setAverageDepth(double depth_m) {
+  if (std::isfinite(depth_m) && depth_m > 0.0) average_depth_m_ = depth_m;
+}
+
+void KltFrontend::reset() {
+  for (CameraState& cam : cameras_) {
+    cam.ids.clear();
+    cam.points.clear();
+    cam.traces.clear();
+    cam.have_last_p_frame = false;
+  }
+  have_previous_ = false;
+}
+
+bool KltFrontend::trackChecked(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
+                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& result) const {
+  SE2f forward(0.f, p + flow_guess);
+  if (trackPatch(from, to, p, *pattern_, align_, num_levels_, forward) != AlignStatus::kConverged) return false;
+  const Eigen::Vector2f tracked = forward.translation();
+  // The backward track starts from the negated guess, so a correct prior lands it near p again.
+  SE2f backward(0.f, tracked - flow_guess);
+  if (trackPatch(to, from, tracked, *pattern_, align_, num_levels_, backward) != AlignStatus::kConverged) return false;
+  if ((backward.translation() - p).squaredNorm() > static_cast<float>(config_.max_recovered_dist2_px2)) return false;
+  result = tracked;
+  return true;
+}
+
+const MotionField* KltFrontend::priorField(int camera, const FrontendInput& input, FrontendStats& stats) {
+  const MotionField* field = input.motion[static_cast<std::size_t>(camera)];
+  if (field == nullptr || config_.prior_mode == PriorMode::kNone) return nullptr;
+  CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
+  if (field->hasVectors()) {
+    if (config_.bridge_iframes) {
+      cam.last_p_frame.copyFrom(*field);
+      cam.have_last_p_frame = true;
+    }
+    return field;
+  }
+  const bool intra = input.picture_type == PictureType::kI || field->pictureType() == PictureType::kI;
+  if (config_.bridge_iframes && intra && cam.have_last_p_frame) {
+    stats.bridged[static_cast<std::size_t>(camera)] = true;
+    return &cam.last_p_frame;
+  }
+  return nullptr;
+}
+
+void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendStats& stats) {
+  CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
+  TemporalStats& ts = stats.temporal[static_cast<std::size_t>(camera)];
+  const ImagePyramid& from = cam.prev();
+  const ImagePyramid& to = cam.cur();
+  const PriorMode mode = config_.prior_mode;
+  const float tolerance = static_cast<float>(config_.consensus_tolerance_px2);
+  cam.next_ids.clear();
+  cam.next_points.clear();
+  cam.traces.clear();
+  ts.previous = static_cast<int>(cam.points.size());
+  const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
+
+  for (std::size_t i = 0; i < cam.points.size(); ++i) {
+    const Eigen::Vector2f p = cam.points[i];
+    const MotionBlock* block = nullptr;
+    if (field != nullptr)
+      block = field->blockAt(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+    const bool has_vector = block != nullptr;
+    const Eigen::Vector2f mv = has_vector ? Eigen::Vector2f(block->dx, block->dy) : zero;
+    ts.with_vector += has_vector;
+
+    // The modes differ only in which guesses run and how their results merge.
+    bool run_plain = false, run_prior = false, plain_ok = false, prior_ok = false;
+    Eigen::Vector2f plain_px, prior_px;
+    switch (mode) {
+      case PriorMode::kNone:
+        run_plain = true;
+        break;
+      case PriorMode::kMv:
+        run_prior = has_vector;
+        run_plain = !has_vector;  // without a vector the prior is the previous position
+        break;
+      case PriorMode::kOfThenMv:
+      case PriorMode::kMvThenOf:
+      case PriorMode::kMvParallelOf:
+        run_plain = true;
+        run_prior = has_vector;
+        break;
+    }
+    if (mode == PriorMode::kMvThenOf && run_prior) {
+      prior_ok = trackChecked(from, to, p, mv, prior_px);
+      run_plain = !prior_ok;
+    }
+    if (run_plain) plain_ok = trackChecked(from, to, p, zero, plain_px);
+    if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
+    if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = trackChecked(from, to, p, mv, prior_px);
+    ts.tracked_plain += plain_ok;
+    ts.tracked_prior += prior_ok;
+
+    bool keep = false;
+    Eigen::Vector2f result = zero;
+    if (plain_ok && prior_ok) {
+      // Only kMvParallelOf gets here: two answers that disagree mean one of them is a false match.
+      if ((plain_px - prior_px).squaredNorm() <= tolerance) {
+        keep = true;
+        result = plain_px;
+      } else {
+        ++ts.consensus_rejections;
+      }
+    } else if (plain_ok) {
+      keep = true;
+      result = plain_px;
+    } else if (prior_ok) {
+      keep = true;
+      result = prior_px;
+      ++ts.rescued;
+    }
+
+    PointTrace trace;
+    trace.track_id = cam.ids[i];
+    trace.previous_px = p;
+    trace.prior_px = p + mv;
+    trace.has_prior = has_vector;
+    trace.tracked_px = keep ? result : (prior_ok ? prior_px : plain_px);
+    trace.kept = keep;
+    cam.traces.push_back(trace);
+    if (!keep) {
+      ++ts.lost;
+      continue;
+    }
+    ++ts.kept;
+    cam.next_ids.push_back(cam.ids[i]);
+    cam.next_points.push_back(result);
+    if (has_vector) {
+      stats.guess_dist_plain_px.push_back((result - p).norm());
+      stats.guess_dist_prior_px.push_back((result - p - mv).norm());
+    }
+  }
+  std::swap(cam.ids, cam.next_ids);
+  std::swap(cam.points, cam.next_points);
+}
+
+void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stats) {
+  CameraState& left = cameras_[0];
+  CameraState& right = cameras_[1];
+  new_points_.clear();
+  const int room = max_points_ - static_cast<int>(left.points.size());
+  if (room <= 0) return;
+  stats.detected = detector_.detect(input.images[0], left.points, detector_params_, room, new_points_);
+  const double depth =
+      config_.matching_guess == StereoGuess::kAverageDepth ? average_depth_m_ : config_.matching_default_depth_m;
+  const int right_room = max_points_ - static_cast<int>(right.points.size());
+  for (const Eigen::Vector2f& p : new_points_) {
+    const std::uint64_t id = next_track_id_++;
+    left.ids.push_back(id);
+    left.points.push_back(p);
+    if (stats.stereo_matched >= right_room) continue;
+    Eigen::Vector2f guess = p;
+    Eigen::Vector3d bearing;
+    Eigen::Vector2d uv;
+    if (cameras_model_[0].unproject(p.cast<double>(), bearing) &&
+        cameras_model_[1].project(T_cam1_cam0_ * (bearing * depth), uv)) {
+      guess = uv.cast<float>();
+    }
+    Eigen::Vector2f matched;
+    if (trackChecked(left.cur(), right.cur(), p, guess - p, matched)) {
+      right.ids.push_back(id);
+      right.points.push_back(matched);
+      ++stats.stereo_matched;
+    }
+  }
+}
+
+void KltFrontend::filterEpipolar(FrontendStats& stats) {
+  CameraState& left = cameras_[0];
+  CameraState& right = cameras_[1];
+  // Both id lists are ascending (ids are issued in increasing order and removals keep the order),
+  // so one merge pass pairs them.
+  std::size_t l = 0, out = 0;
+  const float threshold = static_cast<float>(config_.epipolar_error);
+  for (std::size_t r = 0; r < right.ids.size(); ++r) {
+    const std::uint64_t id = right.ids[r];
+    while (l < left.ids.size() && left.ids[l] < id) ++l;
+    bool keep = true;
+    if (l < left.ids.size() && left.ids[l] == id) {
+      Eigen::Vector3d f0, f1;
+      const bool ok0 = cameras_model_[0].unproject(left.points[l].cast<double>(), f0);
+      const bool ok1 = cameras_model_[1].unproject(right.points[r].cast<double>(), f1);
+      keep = ok0 && ok1 && std::abs(f0.dot(essential_ * f1)) <= threshold;
+      if (!keep) ++stats.epipolar_rejected;
+    }
+    if (keep) {
+      right.ids[out] = id;
+      right.points[out] = right.points[r];
+      ++out;
+    }
+  }
+  right.ids.resize(out);
+  right.points.resize(out);
+}
+
+void KltFrontend::track(const FrontendInput& input, TrackedStereoFrame& out, FrontendStats& stats) {
+  const auto start = std::chrono::steady_clock::now();
+  for (int c = 0; c < 2; ++c) {
+    const GrayView& image = input.images[static_cast<std::size_t>(c)];
+    if (image.width != width_ || image.height != height_) {
+      throw InputError(fmt::format("frontend: camera {} image is {}x{}, the calibration says {}x{}", c, image.width,
+                                   image.height, width_, height_));
+    }
+  }
+  stats.reserve(static_cast<std::size_t>(max_points_));
+  stats.clear();
+  stats.frame_index = frame_index_;
+  for (int c = 0; c < 2; ++c) {
+    CameraState& cam = cameras_[static_cast<std::size_t>(c)];
+    cam.current = 1 - cam.current;
+    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)]);
+  }
+  for (int c = 0; c < 2; ++c) {
+    if (have_previous_) {
+      trackTemporal(c, priorField(c, input, stats), stats);
+    } else {
+      priorField(c, input, stats);  // remember a P-frame field for bridging
+      cameras_[static_cast<std::size_t>(c)].traces.clear();
+    }
+  }
+  detectAndMatch(input, stats);
+  filterEpipolar(stats);
+  have_previous_ = true;
+
+  out.reserve(static_cast<std::size_t>(max_points_));
+  out.clear();
+  out.t_ns = input.t_ns;
+  out.frame_index = frame_index_++;
+  for (int c = 0; c < 2; ++c) {
+    const CameraState& cam = cameras_[static_cast<std::size_t>(c)];
+    auto& observations = out.observations[static_cast<std::size_t>(c)];
+    for (std::size_t i = 0; i < cam.ids.size(); ++i) observations.push_back({cam.ids[i], cam.points[i]});
+  }
+  stats.num_left = static_cast<int>(out.observations[0].size());
+  stats.num_right = static_cast<int>(out.observations[1].size());
+  stats.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace voca

@@ -1,0 +1,140 @@
+#pragma once
+// The KLT frontend: temporal and stereo patch tracking with codec motion-vector priors, corner
+// detection and persistent track ids, with all memory fixed at construction.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "voca/calib/calibration.h"
+#include "voca/core/image.h"
+#include "voca/core/tracked_frame.h"
+#include "voca/frontend/detector.h"
+#include "voca/frontend/frontend_config.h"
+#include "voca/frontend/patch.h"
+#include "voca/frontend/pyramid.h"
+#include "voca/motion/motion_field.h"
+
+namespace voca {
+
+// Upper bounds the frontend allocates for once.
+struct FrontendCapacities {
+  int max_points = 1000;  // per camera
+  int max_width = 0;      // 0 = the calibration's image size
+  int max_height = 0;
+};
+
+// One stereo frame to track: both gray images and, for decoded video, both motion fields.
+struct FrontendInput {
+  std::array<GrayView, 2> images;
+  std::array<const MotionField*, 2> motion{nullptr, nullptr};  // nullptr for raw images
+  PictureType picture_type = PictureType::kUnknown;
+  std::int64_t t_ns = 0;
+};
+
+// Temporal tracking of one camera in one frame.
+struct TemporalStats {
+  int previous = 0;       // points of the previous frame
+  int with_vector = 0;    // of these, how many had a motion vector (possibly bridged)
+  int tracked_plain = 0;  // successful tracks started from the previous position
+  int tracked_prior = 0;  // successful tracks started from the MV prior
+  int kept = 0;
+  int lost = 0;
+  int rescued = 0;  // kept only thanks to the prior (the plain track failed or was not run)
+  int consensus_rejections = 0;
+};
+
+// What one call of KltFrontend::track did.
+struct FrontendStats {
+  std::int64_t frame_index = 0;
+  std::array<TemporalStats, 2> temporal{};
+  std::array<bool, 2> bridged{false, false};  // the camera's prior came from an earlier P-frame
+  int detected = 0;                           // new left points
+  int stereo_matched = 0;                     // of the new points, found in the right image
+  int epipolar_rejected = 0;                  // right observations dropped by the epipolar check
+  int num_left = 0, num_right = 0;            // observations output
+  // For every kept temporal track that had a motion vector, the distance from each initial guess
+  // (previous position: plain; previous position + vector: prior) to the converged position, in
+  // pixels, both cameras (the paper's Fig. 5). Paired by index.
+  std::vector<float> guess_dist_plain_px, guess_dist_prior_px;
+  double time_ms = 0.0;
+
+  void reserve(std::size_t max_points);
+  void clear();
+};
+
+// Per-point record of the last temporal step, for overlays (the paper's Fig. 1).
+struct PointTrace {
+  std::uint64_t track_id = 0;
+  Eigen::Vector2f previous_px = Eigen::Vector2f::Zero();
+  Eigen::Vector2f prior_px = Eigen::Vector2f::Zero();  // previous + motion vector, when has_prior
+  Eigen::Vector2f tracked_px = Eigen::Vector2f::Zero();
+  bool has_prior = false;
+  bool kept = false;
+};
+
+// Stereo KLT tracker. Not thread-safe; one instance per stream. No heap allocation in track()
+// after the first frame.
+class KltFrontend {
+ public:
+  // The rig's first two cameras are left (cam0) and right (cam1). Throws InputError for an invalid
+  // config or a rig with fewer than two cameras.
+  KltFrontend(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities = {});
+
+  // Tracks the previous frame's points into this frame, detects new left points in empty cells and
+  // matches them into the right image. Images must have the calibration's size (at most the capacity).
+  void track(const FrontendInput& input, TrackedStereoFrame& out, FrontendStats& stats);
+
+  // Depth for the stereo guess in StereoGuess::kAverageDepth mode (the backend's current estimate).
+  void setAverageDepth(double depth_m);
+  // Forgets every track (the next frame starts from detection).
+  void reset();
+
+  // Temporal step of the last frame per camera, for visualisation.
+  std::span<const PointTrace> traces(int camera) const { return cameras_[static_cast<std::size_t>(camera)].traces; }
+  const FrontendConfig& config() const { return config_; }
+
+ private:
+  struct CameraState {
+    std::array<ImagePyramid, 2> pyramids;
+    int current = 0;
+    std::vector<std::uint64_t> ids, next_ids;
+    std::vector<Eigen::Vector2f> points, next_points;
+    MotionField last_p_frame;
+    bool have_last_p_frame = false;
+    std::vector<PointTrace> traces;
+    const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
+    const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
+  };
+
+  // Forward-backward tracking from `from` to `to` with a flow guess; true and the converged position
+  // when both directions converge and the round trip returns within max_recovered_dist2.
+  bool trackChecked(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
+                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& result) const;
+  const MotionField* priorField(int camera, const FrontendInput& input, FrontendStats& stats);
+  void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
+  void detectAndMatch(const FrontendInput& input, FrontendStats& stats);
+  void filterEpipolar(FrontendStats& stats);
+
+  FrontendConfig config_;
+  const PatchPattern* pattern_ = nullptr;
+  AlignParams align_;
+  int num_levels_ = 0;
+  int max_points_ = 0;
+  int width_ = 0, height_ = 0;
+  std::array<GenericCamera<double>, 2> cameras_model_;
+  SE3d T_cam1_cam0_;
+  Eigen::Matrix3d essential_;  // f0^T E f1 = 0 for unit bearings f0 (cam0), f1 (cam1)
+  double average_depth_m_ = 0.0;
+  DetectorParams detector_params_;
+  GridDetector detector_;
+  std::vector<Eigen::Vector2f> new_points_;
+  std::array<CameraState, 2> cameras_;
+  std::uint64_t next_track_id_ = 1;
+  std::int64_t frame_index_ = 0;
+  bool have_previous_ = false;
+};
+
+}  // namespace voca

@@ -1,0 +1,80 @@
+#include "voca/frontend/frontend_config.h"
+
+#include <fmt/core.h>
+#include <cmath>
+
+#include "voca/core/error.h"
+
+namespace voca {
+
+std::string_view priorModeName(PriorMode mode) {
+  switch (mode) {
+    case PriorMode::kNone:
+      return "none";
+    case PriorMode::kMv:
+      return "mv";
+    case PriorMode::kOfThenMv:
+      return "of_then_mv";
+    case PriorMode::kMvThenOf:
+      return "mv_then_of";
+    case PriorMode::kMvParallelOf:
+      return "mv_parallel_of";
+  }
+  return "?";
+}
+
+std::optional<PriorMode> parsePriorMode(std::string_view name) {
+  for (PriorMode mode :
+       {PriorMode::kNone, PriorMode::kMv, PriorMode::kOfThenMv, PriorMode::kMvThenOf, PriorMode::kMvParallelOf}) {
+    if (priorModeName(mode) == name) return mode;
+  }
+  return std::nullopt;
+}
+
+std::string_view stereoGuessName(StereoGuess guess) {
+  return guess == StereoGuess::kFixedDepth ? "reproj_fixed_depth" : "reproj_avg_depth";
+}
+
+std::optional<StereoGuess> parseStereoGuess(std::string_view name) {
+  if (name == "reproj_fixed_depth") return StereoGuess::kFixedDepth;
+  if (name == "reproj_avg_depth") return StereoGuess::kAverageDepth;
+  return std::nullopt;
+}
+
+namespace {
+
+void checkInt(const std::string& context, const char* key, int value, int lo, int hi) {
+  if (value < lo || value > hi) {
+    throw InputError(fmt::format("{}.{}: expected an integer in [{}, {}], got {}", context, key, lo, hi, value));
+  }
+}
+
+// lo_open: the lower bound itself is not allowed.
+void checkReal(const std::string& context, const char* key, double value, double lo, double hi, bool lo_open) {
+  const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
+  if (!ok) {
+    throw InputError(
+        fmt::format("{}.{}: expected a number in {}{}, {}], got {}", context, key, lo_open ? "(" : "[", lo, hi, value));
+  }
+}
+
+}  // namespace
+
+void validateFrontendConfig(const FrontendConfig& c, const std::string& context) {
+  checkInt(context, "grid_size_px", c.grid_size_px, 8, 1024);
+  checkInt(context, "pyramid_levels", c.pyramid_levels, 0, 6);
+  checkInt(context, "max_iterations", c.max_iterations, 1, 100);
+  if (c.pattern != 24 && c.pattern != 52) {
+    throw InputError(fmt::format("{}.pattern: expected 24 or 52, got {}", context, c.pattern));
+  }
+  checkReal(context, "max_recovered_dist2_px2", c.max_recovered_dist2_px2, 0.0, 100.0, true);
+  checkReal(context, "epipolar_error", c.epipolar_error, 0.0, 1.0, true);
+  checkReal(context, "matching_default_depth_m", c.matching_default_depth_m, 0.0, 1e4, true);
+  checkReal(context, "image_safe_radius_px", c.image_safe_radius_px, 0.0, 1e5, false);
+  checkInt(context, "detection_max_threshold", c.detection_max_threshold, 1, 255);
+  checkInt(context, "detection_min_threshold", c.detection_min_threshold, 1, c.detection_max_threshold);
+  checkInt(context, "detection_border_px", c.detection_border_px, 3, 1000);
+  checkReal(context, "consensus_tolerance_px2", c.consensus_tolerance_px2, 0.0, 1e4, false);
+}
+
+}  // namespace voca

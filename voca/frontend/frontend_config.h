@@ -1,0 +1,57 @@
+#pragma once
+// Parameters of the KLT frontend (the JSON "frontend" section; defaults are the paper's EuRoC values).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace voca {
+
+// How initial guesses for temporal tracking are chosen and merged (DESIGN.md section 5).
+enum class PriorMode : std::uint8_t {
+  kNone,          // previous position only (the Basalt baseline)
+  kMv,            // motion-vector prior only
+  kOfThenMv,      // previous position; the failures retried with the MV prior
+  kMvThenOf,      // MV prior; the failures retried from the previous position
+  kMvParallelOf,  // both; kept when only one succeeds or both agree within consensus_tolerance
+};
+
+// Where a new left point is first looked for in the right image.
+enum class StereoGuess : std::uint8_t {
+  kFixedDepth,    // reprojection at matching_default_depth_m
+  kAverageDepth,  // reprojection at the backend's average depth (setAverageDepth), default until set
+};
+
+std::string_view priorModeName(PriorMode mode);
+std::optional<PriorMode> parsePriorMode(std::string_view name);
+std::string_view stereoGuessName(StereoGuess guess);
+std::optional<StereoGuess> parseStereoGuess(std::string_view name);
+
+struct FrontendConfig {
+  int grid_size_px = 40;
+  int pyramid_levels = 3;                 // levels above the full-resolution image (4 levels in all)
+  int max_iterations = 5;                 // Gauss-Newton iterations per level
+  int pattern = 52;                       // 24 or 52 sample points per patch
+  double max_recovered_dist2_px2 = 0.25;  // forward-backward round trip tolerance
+  double epipolar_error = 0.005;          // |f0^T E f1| on unit bearings
+  StereoGuess matching_guess = StereoGuess::kFixedDepth;
+  double matching_default_depth_m = 2.0;
+  double image_safe_radius_px = 0.0;  // detect only this close to the principal point; 0 = everywhere
+  int detection_max_threshold = 40;
+  int detection_min_threshold = 5;
+  int detection_border_px = 19;
+  PriorMode prior_mode = PriorMode::kMvParallelOf;
+  double consensus_tolerance_px2 = 0.05;
+  bool bridge_iframes = true;  // reuse the last P-frame's motion on I-frames
+};
+
+}  // namespace voca
+
+namespace voca {
+
+// Checks every value against its allowed range; throws InputError naming `context`.<key>, the
+// allowed range and the value found (e.g. "config.json: frontend.pattern: expected 24 or 52, got 30").
+void validateFrontendConfig(const FrontendConfig& config, const std::string& context = "frontend");
+
+}  // namespace voca

@@ -1,0 +1,212 @@
+#include "voca/frontend/patch.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+namespace voca {
+
+namespace {
+
+// Rows of odd coordinates, spacing 2: each row lists its y and the largest |x|.
+PatchPattern makePattern(std::initializer_list<std::pair<int, int>> rows) {
+  PatchPattern pattern;
+  for (const auto& [row_y, max_x] : rows) {
+    for (int px = -max_x; px <= max_x; px += 2) {
+      pattern.x[static_cast<std::size_t>(pattern.size)] = static_cast<float>(px);
+      pattern.y[static_cast<std::size_t>(pattern.size)] = static_cast<float>(row_y);
+      ++pattern.size;
+    }
+  }
+  return pattern;
+}
+
+}  // namespace
+
+const PatchPattern& pattern24() {
+  static const PatchPattern pattern = makePattern({{-5, 1}, {-3, 3}, {-1, 5}, {1, 5}, {3, 3}, {5, 1}});
+  return pattern;
+}
+
+const PatchPattern& pattern52() {
+  static const PatchPattern pattern = makePattern({{-7, 3}, {-5, 5}, {-3, 7}, {-1, 7}, {1, 7}, {3, 7}, {5, 5}, {7, 3}});
+  return pattern;
+}
+
+const PatchPattern* patternBySize(int size) {
+  if (size == 24) return &pattern24();
+  if (size == 52) return &pattern52();
+  return nullptr;
+}
+
+float sampleBilinear(const FloatView& image, float x, float y) {
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= 1: truncation is floor
+  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
+  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
+  const float* r1 = r0 + image.stride;
+  const float top = r0[0] + fx * (r0[1] - r0[0]);
+  const float bottom = r1[0] + fx * (r1[1] - r1[0]);
+  return top + fy * (bottom - top);
+}
+
+Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float y) {
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
+  const std::ptrdiff_t s = image.stride;
+  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * s + ix;
+  const float* r1 = r0 + s;
+  const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
+  const float value = w00 * r0[0] + w10 * r0[1] + w01 * r1[0] + w11 * r1[1];
+  // Central differences at the four corners, interpolated with the same weights: smoother than the
+  // piecewise-constant derivative of the bilinear surface, which helps convergence.
+  const float gx =
+      0.5f * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
+  const float gy =
+      0.5f * (w00 * (r1[0] - r0[-s]) + w10 * (r1[1] - r0[1 - s]) + w01 * (r1[s] - r0[0]) + w11 * (r1[s + 1] - r0[1]));
+  return {value, gx, gy};
+}
+
+void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern) {
+  size = pattern.size;
+  valid = false;
+  const int n = size;
+  std::array<float, PatchPattern::kMaxSize> jpix[3];
+  float sum = 0.f;
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const float x = center.x() + pattern.x[k], y = center.y() + pattern.y[k];
+    if (!canSample(image, x, y)) {
+      value[k] = -1.f;
+      jpix[0][k] = jpix[1][k] = jpix[2][k] = 0.f;
+      continue;
+    }
+    const Eigen::Vector3f vg = sampleWithGradient(image, x, y);
+    value[k] = vg[0];
+    // d I(center + R(theta) q + t) / d (tx, ty, theta) at identity: (gx, gy, -gx qy + gy qx).
+    jpix[0][k] = vg[1];
+    jpix[1][k] = vg[2];
+    jpix[2][k] = -vg[1] * pattern.y[k] + vg[2] * pattern.x[k];
+    sum += vg[0];
+    ++count;
+  }
+  if (2 * count <= n || !(sum > 1e-3f * static_cast<float>(count))) return;
+  const float mean = sum / static_cast<float>(count);
+  const float inv_mean = 1.f / mean;
+  float jsum[3] = {0.f, 0.f, 0.f};
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < n; ++i) jsum[c] += jpix[c][static_cast<std::size_t>(i)];
+    jsum[c] /= static_cast<float>(count);
+  }
+  // n_i = v_i / mean with mean = sum_j v_j / count, so
+  // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
+  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (value[k] < 0.f) {
+      jac[0][k] = jac[1][k] = jac[2][k] = 0.f;
+      continue;
+    }
+    value[k] *= inv_mean;
+    Eigen::Vector3d j;
+    for (int c = 0; c < 3; ++c) {
+      jac[c][k] = (jpix[c][k] - value[k] * jsum[c]) * inv_mean;
+      j[c] = jac[c][k];
+    }
+    hessian.noalias() += j * j.transpose();
+  }
+  const double trace = hessian.trace();
+  const double det = hessian.determinant();
+  // Scale-free test for an untextured (rank-deficient) patch.
+  if (!(trace > 0.0) || !(det > 1e-9 * trace * trace * trace)) return;
+  const Eigen::Matrix3d inverse = hessian.inverse();
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    for (int r = 0; r < 3; ++r) {
+      step[r][k] =
+          static_cast<float>(inverse(r, 0) * jac[0][k] + inverse(r, 1) * jac[1][k] + inverse(r, 2) * jac[2][k]);
+    }
+  }
+  for (int i = n; i < PatchPattern::kMaxSize; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    value[k] = -1.f;
+    step[0][k] = step[1][k] = step[2][k] = 0.f;
+  }
+  valid = true;
+}
+
+int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern, const SE2f& T,
+                  std::array<float, PatchPattern::kMaxSize>& residual) {
+  const int n = tmpl.size;
+  const float c = T.unitComplex().x(), s = T.unitComplex().y();
+  const float tx = T.translation().x(), ty = T.translation().y();
+  float sum = 0.f;
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const float x = c * pattern.x[k] - s * pattern.y[k] + tx;
+    const float y = s * pattern.x[k] + c * pattern.y[k] + ty;
+    if (tmpl.value[k] >= 0.f && canSample(target, x, y)) {
+      residual[k] = sampleBilinear(target, x, y);
+      sum += residual[k];
+      ++count;
+    } else {
+      residual[k] = -1.f;
+    }
+  }
+  if (count == 0 || !(sum > 1e-3f * static_cast<float>(count))) return 0;
+  const float inv_mean = static_cast<float>(count) / sum;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    residual[k] = residual[k] >= 0.f ? residual[k] * inv_mean - tmpl.value[k] : 0.f;
+  }
+  return count;
+}
+
+AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern,
+                       const AlignParams& params, SE2f& T) {
+  if (!tmpl.valid) return AlignStatus::kTemplateInvalid;
+  alignas(32) std::array<float, PatchPattern::kMaxSize> residual;
+  const int n = tmpl.size;
+  const float max_step2 = params.max_step_px * params.max_step_px;
+  const float min_step2 = params.min_step_px * params.min_step_px;
+  for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
+    const int used = patchResidual(target, tmpl, pattern, T, residual);
+    if (2 * used <= n) return AlignStatus::kTooFewPoints;
+    float inc[3] = {0.f, 0.f, 0.f};
+    for (int r = 0; r < 3; ++r) {
+      float acc = 0.f;
+      for (int i = 0; i < n; ++i)
+        acc += tmpl.step[r][static_cast<std::size_t>(i)] * residual[static_cast<std::size_t>(i)];
+      inc[r] = acc;
+    }
+    if (!std::isfinite(inc[0]) || !std::isfinite(inc[1]) || !std::isfinite(inc[2])) return AlignStatus::kNonFinite;
+    const float step2 = inc[0] * inc[0] + inc[1] * inc[1];
+    if (step2 > max_step2 || std::abs(inc[2]) > 1.f) return AlignStatus::kHugeStep;
+    T *= SE2f::exp(Eigen::Vector3f(-inc[0], -inc[1], -inc[2]));
+    if (!canSample(target, T.translation().x(), T.translation().y())) return AlignStatus::kOutside;
+    if (step2 < min_step2) break;
+  }
+  return AlignStatus::kConverged;
+}
+
+AlignStatus trackPatch(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& from_px,
+                       const PatchPattern& pattern, const AlignParams& params, int num_levels, SE2f& T) {
+  PatchTemplate tmpl;
+  for (int level = num_levels - 1; level >= 0; --level) {
+    const float scale = static_cast<float>(1 << level);
+    const float inv_scale = 1.f / scale;
+    tmpl.build(from.level(level), from_px * inv_scale, pattern);
+    if (!tmpl.valid) {
+      // A coarse level may lack texture or room near the border: the finer levels still decide.
+      if (level > 0) continue;
+      return AlignStatus::kTemplateInvalid;
+    }
+    T.translation() *= inv_scale;
+    const AlignStatus status = alignPatch(to.level(level), tmpl, pattern, params, T);
+    T.translation() *= scale;
+    if (status != AlignStatus::kConverged) return status;
+  }
+  return AlignStatus::kConverged;
+}
+
+}  // namespace voca

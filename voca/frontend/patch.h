@@ -1,0 +1,84 @@
+#pragma once
+// SE(2) inverse-compositional patch alignment on one pyramid level, with mean-normalised
+// intensities (the KLT core of the frontend).
+
+#include <Eigen/Core>
+#include <array>
+
+#include "voca/frontend/pyramid.h"
+#include "voca/geometry/se2.h"
+
+namespace voca {
+
+// Sample offsets of a patch around its centre, in pixels of the level it is sampled on.
+// Pattern52: 52 points on a 2 px grid inside a 15x15 area; Pattern24: 24 points inside 11x11.
+struct PatchPattern {
+  static constexpr int kMaxSize = 52;
+  int size = 0;
+  std::array<float, kMaxSize> x{};
+  std::array<float, kMaxSize> y{};
+};
+
+const PatchPattern& pattern24();
+const PatchPattern& pattern52();
+// The pattern with this many points (24 or 52), or nullptr.
+const PatchPattern* patternBySize(int size);
+
+// True when (x, y) can be sampled with its interpolated central-difference gradient: the 4x4
+// neighbourhood of the bilinear cell lies inside the image.
+inline bool canSample(const FloatView& image, float x, float y) {
+  return x >= 1.f && y >= 1.f && x < static_cast<float>(image.width - 2) && y < static_cast<float>(image.height - 2);
+}
+// Bilinear interpolation; (0, 0) is the centre of the top-left pixel. Requires canSample().
+float sampleBilinear(const FloatView& image, float x, float y);
+// Bilinear interpolation of the value and of the central-difference gradient. Requires canSample().
+Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float y);
+
+// The template side of the alignment: mean-normalised intensities of the pattern around a point in
+// the reference image, the Jacobian of the normalised residual with respect to an SE(2) increment
+// (tx, ty, theta) applied on the right of the warp, and H^-1 J^T. Pattern points whose neighbourhood
+// leaves the image are marked invalid and contribute nothing. Arrays are contiguous, of fixed size,
+// so the per-iteration loops are plain vectorisable float loops.
+struct PatchTemplate {
+  int size = 0;
+  alignas(32) std::array<float, PatchPattern::kMaxSize> value{};    // normalised, -1 = invalid
+  alignas(32) std::array<float, PatchPattern::kMaxSize> jac[3]{};   // d residual / d (tx, ty, theta)
+  alignas(32) std::array<float, PatchPattern::kMaxSize> step[3]{};  // rows of H^-1 J^T
+  bool valid = false;
+
+  // Samples the template at `center` (level pixels). valid is false when fewer than half of the
+  // points can be sampled, the patch is black or H is singular (no texture).
+  void build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern);
+};
+
+// Normalised residual of the target patch under warp T (pattern offset q -> R q + t in the target
+// level): r_i = I(T q_i) / mean - value_i for points valid on both sides, 0 otherwise. Returns the
+// number of residuals used (0 when the target patch is black).
+int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern, const SE2f& T,
+                  std::array<float, PatchPattern::kMaxSize>& residual);
+
+// Why an alignment stopped.
+enum class AlignStatus : std::uint8_t { kConverged, kTemplateInvalid, kTooFewPoints, kNonFinite, kHugeStep, kOutside };
+
+struct AlignParams {
+  int max_iterations = 5;
+  // A step whose translation exceeds this (level pixels) means the linearisation is meaningless.
+  float max_step_px = 20.f;
+  // Iterations stop early once the step's translation is below this (level pixels).
+  float min_step_px = 1e-3f;
+};
+
+// Refines T (pattern offset -> target level pixels) on one level by inverse-compositional Gauss-Newton,
+// T <- T exp(-H^-1 J^T r). Fails on non-finite or huge steps, fewer than half of the pattern points
+// inside the target, or the patch centre leaving the target image.
+AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern,
+                       const AlignParams& params, SE2f& T);
+
+// Coarse-to-fine alignment over pyramids: the template around `from_px` (level-0 pixels) in `from`,
+// the warp T initialised by the caller (translation = guessed level-0 position in `to`, rotation
+// usually identity); on success T holds the converged warp in level-0 pixels. Uses levels
+// num_levels-1 .. 0 of both pyramids.
+AlignStatus trackPatch(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& from_px,
+                       const PatchPattern& pattern, const AlignParams& params, int num_levels, SE2f& T);
+
+}  // namespace voca

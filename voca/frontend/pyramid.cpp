@@ -1,0 +1,69 @@
+#include "voca/frontend/pyramid.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace voca {
+
+namespace {
+int halfSize(int n) { return (n + 1) / 2; }
+}  // namespace
+
+ImagePyramid::ImagePyramid(int max_width, int max_height, int num_levels)
+    : num_levels_(num_levels), max_width_(max_width), max_height_(max_height) {
+  if (num_levels < 1 || num_levels > kMaxLevels) throw std::invalid_argument("ImagePyramid: levels out of range");
+  int w = max_width, h = max_height;
+  for (int l = 0; l < num_levels; ++l) {
+    levels_[static_cast<std::size_t>(l)].resize(w, h);
+    w = halfSize(w);
+    h = halfSize(h);
+  }
+  scratch_.resize(halfSize(max_width), max_height);
+}
+
+void ImagePyramid::build(GrayView image) {
+  if (image.width > max_width_ || image.height > max_height_) {
+    throw std::length_error("ImagePyramid: image larger than the capacity");
+  }
+  FloatImage& base = levels_[0];
+  base.resize(image.width, image.height);
+  for (int y = 0; y < image.height; ++y) {
+    const std::uint8_t* src = image.row(y);
+    float* dst = base.row(y);
+    for (int x = 0; x < image.width; ++x) dst[x] = static_cast<float>(src[x]);
+  }
+  for (int l = 1; l < num_levels_; ++l) {
+    downsample(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)]);
+  }
+}
+
+void ImagePyramid::downsample(const FloatImage& src, FloatImage& dst) {
+  const int sw = src.width(), sh = src.height();
+  const int dw = halfSize(sw), dh = halfSize(sh);
+  dst.resize(dw, dh);
+  scratch_.resize(dw, sh);
+  // Horizontal pass, evaluated only at the even columns that survive subsampling.
+  for (int y = 0; y < sh; ++y) {
+    const float* s = src.row(y);
+    float* t = scratch_.row(y);
+    for (int x = 0; x < dw; ++x) {
+      const int c = 2 * x;
+      const float m2 = s[std::max(c - 2, 0)], m1 = s[std::max(c - 1, 0)];
+      const float p1 = s[std::min(c + 1, sw - 1)], p2 = s[std::min(c + 2, sw - 1)];
+      t[x] = (m2 + p2 + 4.f * (m1 + p1) + 6.f * s[c]) * (1.f / 16.f);
+    }
+  }
+  // Vertical pass at the even rows.
+  for (int y = 0; y < dh; ++y) {
+    const int c = 2 * y;
+    const float* m2 = scratch_.row(std::max(c - 2, 0));
+    const float* m1 = scratch_.row(std::max(c - 1, 0));
+    const float* c0 = scratch_.row(c);
+    const float* p1 = scratch_.row(std::min(c + 1, sh - 1));
+    const float* p2 = scratch_.row(std::min(c + 2, sh - 1));
+    float* d = dst.row(y);
+    for (int x = 0; x < dw; ++x) d[x] = (m2[x] + p2[x] + 4.f * (m1[x] + p1[x]) + 6.f * c0[x]) * (1.f / 16.f);
+  }
+}
+
+}  // namespace voca

@@ -1,0 +1,43 @@
+#pragma once
+// Float image pyramids for KLT tracking: [1 4 6 4 1]/16 smoothing and 2x subsampling, buffers fixed
+// at construction.
+
+#include <array>
+#include <cstdint>
+
+#include "voca/core/image.h"
+
+namespace voca {
+
+using FloatImage = Image<float>;
+using FloatView = ImageView<const float>;
+
+// Level 0 is the input converted to float; level l+1 is level l smoothed by the separable binomial
+// kernel [1 4 6 4 1]/16 (borders replicated) and subsampled by taking every second pixel, so pixel
+// (x, y) of level l lies at (2^l x, 2^l y) in level 0 and coordinates convert by an exact scale.
+class ImagePyramid {
+ public:
+  static constexpr int kMaxLevels = 8;
+
+  ImagePyramid() = default;
+  // num_levels counts all levels including level 0 (the config's `levels` + 1).
+  ImagePyramid(int max_width, int max_height, int num_levels);
+
+  // Rebuilds every level from image (at most the capacity given at construction). No allocation.
+  void build(GrayView image);
+
+  int numLevels() const { return num_levels_; }
+  FloatView level(int index) const { return levels_[static_cast<std::size_t>(index)].view(); }
+  int width() const { return levels_[0].width(); }
+  int height() const { return levels_[0].height(); }
+
+ private:
+  void downsample(const FloatImage& src, FloatImage& dst);
+
+  int num_levels_ = 0;
+  int max_width_ = 0, max_height_ = 0;
+  std::array<FloatImage, kMaxLevels> levels_;
+  FloatImage scratch_;  // horizontally filtered rows of the level being reduced
+};
+
+}  // namespace voca
