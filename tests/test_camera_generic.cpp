@@ -80,6 +80,16 @@ TEST_CASE("fromParams builds every model and dispatches to it") {
   }
 }
 
+TEST_CASE("fromParams also builds float cameras") {
+  const auto camera =
+      GenericCamera<float>::fromParams("eucm", std::vector<double>{460.8, 459.4, 365.9, 249.3, 0.59, 1.13});
+  CHECK(camera.modelName() == "eucm");
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();
+  REQUIRE(camera.project(Eigen::Vector3f(0.f, 0.f, 2.f), uv));
+  CHECK(uv[0] == doctest::Approx(365.9f));  // the optical axis lands on the principal point
+  CHECK_THROWS_AS(GenericCamera<float>::fromParams("eucm", std::vector<double>{1, 2}), InputError);
+}
+
 TEST_CASE("the default camera is a unit pinhole") {
   const GenericCamera<double> camera;
   CHECK(camera.modelName() == "pinhole");
