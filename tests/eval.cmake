@@ -1,2 +1,2 @@
 voca_add_test(test_eval SOURCES test_eval.cpp LIBS voca_eval)
-voca_add_test(test_eval_evo SOURCES test_eval_evo.cpp LIBS voca_eval LABELS e2e)
+voca_add_test(test_eval_evo SOURCES test_eval_evo.cpp LIBS voca_eval voca_calib LABELS e2e)

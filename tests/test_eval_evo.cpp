@@ -4,6 +4,7 @@
 #include <iomanip>
 
 #include "tests/test_support.h"
+#include "voca/calib/calibration.h"
 #include "voca/eval/evaluate.h"
 
 // Parity with evo on its own test data (../shared/data/evo_reference, values in its SOURCE.txt).
@@ -106,4 +107,25 @@ TEST_CASE("evo parity: EuRoC V1_02, TUM estimate vs EuRoC csv, time association"
                                << ate.max);
   MESSAGE(std::setprecision(8) << "RTE rmse " << rte.rmse << " mean " << rte.mean << " median " << rte.median << " max "
                                << rte.max);
+}
+
+TEST_CASE("frames: a cam0 trajectory matches body-frame ground truth only after conversion") {
+  const auto calib = voca::test::sharedData("calib/euroc_ds_calib.json");
+  const auto dir = voca::test::sharedData("evo_reference");
+  if (!calib || !dir) return;
+  const voca::SE3d T_body_cam0 = voca::loadCalibration(*calib).cameras.at(0).T_body_cam;
+  REQUIRE(T_body_cam0.translation().norm() > 0.05);  // EuRoC's cam0 sits ~7 cm from the IMU
+
+  const voca::Trajectory gt = voca::loadTrajectory(*dir / "V102_groundtruth.csv");
+  const voca::Trajectory est_cam0 =
+      voca::convertPoseFrame(gt, voca::PoseFrame::kBody, voca::PoseFrame::kCam0, T_body_cam0);
+  // Compared as if it were a body trajectory, the lever arm and the camera's rotation show up:
+  // the relative motions differ by centimetres.
+  const voca::EvalReport wrong = voca::evaluateTrajectory(est_cam0, gt);
+  CHECK(wrong.rte->stats.rmse > 0.01);
+  const voca::EvalReport right = voca::evaluateTrajectory(
+      voca::convertPoseFrame(est_cam0, voca::PoseFrame::kCam0, voca::PoseFrame::kBody, T_body_cam0), gt);
+  // Only rounding remains (positions of a few metres).
+  CHECK(right.ate.stats.max < 1e-12);
+  CHECK(right.rte->stats.max < 1e-12);
 }

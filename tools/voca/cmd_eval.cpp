@@ -66,8 +66,10 @@ void matchFrames(LoadedTrajectory& est, const LoadedTrajectory& gt, const std::s
   }
   const voca::StereoRig rig = voca::loadCalibration(calib_path);
   if (rig.cameras.empty()) throw voca::InputError(fmt::format("{} has no cameras", calib_path));
-  const voca::SE3d& T_body_cam0 = rig.cameras[0].T_body_cam;
-  est.trajectory = voca::changeBodyFrame(est.trajectory, est.frame == "cam0" ? T_body_cam0.inverse() : T_body_cam0);
+  const auto frame = [](const std::string& name) {
+    return name == "cam0" ? voca::PoseFrame::kCam0 : voca::PoseFrame::kBody;
+  };
+  est.trajectory = voca::convertPoseFrame(est.trajectory, frame(est.frame), frame(gt.frame), rig.cameras[0].T_body_cam);
   est.frame = gt.frame;
 }
 

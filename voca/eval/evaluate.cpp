@@ -34,6 +34,12 @@ std::vector<Eigen::Matrix4d> associatedMatrices(const Trajectory& trajectory, co
 
 }  // namespace
 
+Trajectory convertPoseFrame(const Trajectory& trajectory, PoseFrame from, PoseFrame to, const SE3d& T_body_cam0) {
+  if (from == to) return trajectory;
+  // T_world_cam0 = T_world_body * T_body_cam0, and back with the inverse.
+  return changeBodyFrame(trajectory, from == PoseFrame::kBody ? T_body_cam0 : T_body_cam0.inverse());
+}
+
 EvalReport evaluateTrajectory(const Trajectory& est, const Trajectory& gt, const EvalOptions& options) {
   EvalReport report;
   report.est_poses = est.poses.size();

@@ -44,6 +44,13 @@ struct EvalReport {
   EvalVerdict rte_verdict = EvalVerdict::kOk;
 };
 
+// The frame whose poses a trajectory holds: the calibration's body frame (our outputs, EuRoC
+// ground truth) or the left camera (KITTI poses).
+enum class PoseFrame { kBody, kCam0 };
+
+// The same motion expressed in another frame, using the calibration's T_body_cam0.
+Trajectory convertPoseFrame(const Trajectory& trajectory, PoseFrame from, PoseFrame to, const SE3d& T_body_cam0);
+
 // Associates, aligns and measures. Both trajectories must be in the same body frame already.
 EvalReport evaluateTrajectory(const Trajectory& est, const Trajectory& gt, const EvalOptions& options = {});
 
