@@ -1,0 +1,241 @@
+// `voca mv`: renders what the codec saw: each frame with its block partitions, the motion vectors as
+// arrows (forward flow) and the vectors that median thresholding flags as likely outliers (the VOCA
+// paper's Fig. 3), as PNGs or an .mp4.
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <fmt/core.h>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/decode/rgb_video_writer.h"
+#include "drivers/decode/video_reader.h"
+#include "tools/voca/command.h"
+#include "voca/core/error.h"
+#include "voca/image/png_io.h"
+#include "voca/motion/motion_field.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using voca::Rgb8;
+using voca::RgbImage;
+
+struct MvOptions {
+  std::string input;
+  std::string out;
+  int camera = 0;
+  std::string frames;
+  std::string format = "png";
+  std::string decoder = "auto";
+  float arrow_scale = 1.0f;
+  voca::OutlierParams outliers;
+};
+
+// Frame range "a:b" (a inclusive, b exclusive, either may be omitted).
+struct FrameRange {
+  std::int64_t first = 0;
+  std::int64_t end = std::numeric_limits<std::int64_t>::max();
+};
+
+FrameRange parseFrameRange(const std::string& text) {
+  FrameRange range;
+  if (text.empty()) return range;
+  const std::size_t colon = text.find(':');
+  auto parse = [&](std::string_view part, std::int64_t& value) {
+    if (part.empty()) return;
+    const auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
+    if (ec != std::errc() || ptr != part.data() + part.size() || value < 0) {
+      throw voca::InputError("--frames '" + text + "': expected a:b with non-negative frame indices (b exclusive)");
+    }
+  };
+  if (colon == std::string::npos) {
+    parse(text, range.first);  // a single index
+    range.end = range.first + 1;
+    return range;
+  }
+  parse(std::string_view(text).substr(0, colon), range.first);
+  parse(std::string_view(text).substr(colon + 1), range.end);
+  if (range.end <= range.first) throw voca::InputError("--frames '" + text + "': the range is empty");
+  return range;
+}
+
+// Drawing on an RGB image, clipped to its bounds.
+void plot(RgbImage& image, int x, int y, Rgb8 colour) {
+  if (x >= 0 && y >= 0 && x < image.width() && y < image.height()) image(x, y) = colour;
+}
+
+void drawLine(RgbImage& image, float x0f, float y0f, float x1f, float y1f, Rgb8 colour) {
+  int x0 = static_cast<int>(std::lround(x0f)), y0 = static_cast<int>(std::lround(y0f));
+  const int x1 = static_cast<int>(std::lround(x1f)), y1 = static_cast<int>(std::lround(y1f));
+  const int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0);
+  const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+  int err = dx + dy;
+  for (int guard = 0; guard < 100000; ++guard) {  // Bresenham; the guard only bounds absurd vectors
+    plot(image, x0, y0, colour);
+    if (x0 == x1 && y0 == y1) break;
+    const int e2 = 2 * err;
+    if (e2 >= dy) {
+      err += dy;
+      x0 += sx;
+    }
+    if (e2 <= dx) {
+      err += dx;
+      y0 += sy;
+    }
+  }
+}
+
+void drawArrow(RgbImage& image, float x0, float y0, float x1, float y1, Rgb8 colour) {
+  drawLine(image, x0, y0, x1, y1, colour);
+  const float length = std::hypot(x1 - x0, y1 - y0);
+  if (length < 1.5f) return;
+  const float head = std::min(4.0f, 0.4f * length);
+  const float ux = (x0 - x1) / length, uy = (y0 - y1) / length;
+  constexpr float kCos = 0.866f, kSin = 0.5f;  // 30 degree barbs
+  drawLine(image, x1, y1, x1 + head * (kCos * ux - kSin * uy), y1 + head * (kSin * ux + kCos * uy), colour);
+  drawLine(image, x1, y1, x1 + head * (kCos * ux + kSin * uy), y1 + head * (-kSin * ux + kCos * uy), colour);
+}
+
+constexpr Rgb8 kPartitionColour{70, 110, 200};
+constexpr Rgb8 kVectorColour{40, 230, 60};
+constexpr Rgb8 kOutlierColour{255, 40, 40};
+
+void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage& out) {
+  const voca::GrayImage& luma = frame.luma;
+  out.resize(luma.width(), luma.height());
+  for (int y = 0; y < luma.height(); ++y) {
+    for (int x = 0; x < luma.width(); ++x) {
+      const std::uint8_t v = luma(x, y);
+      out(x, y) = Rgb8{v, v, v};
+    }
+  }
+  // Partitions first (top and left edge of every block, so shared edges are drawn once), then the
+  // vectors on top; outliers last so they stay visible.
+  for (const voca::MotionBlock& b : frame.motion.blocks()) {
+    if (b.ref != voca::RefDirection::kPast) continue;
+    for (int x = b.x; x < b.x + b.w; ++x) plot(out, x, b.y, kPartitionColour);
+    for (int y = b.y; y < b.y + b.h; ++y) plot(out, b.x, y, kPartitionColour);
+  }
+  for (const bool outliers : {false, true}) {
+    for (const voca::MotionBlock& b : frame.motion.blocks()) {
+      if (b.ref != voca::RefDirection::kPast || b.outlier != outliers) continue;
+      const float cx = b.centreX(), cy = b.centreY();
+      const Rgb8 colour = outliers ? kOutlierColour : kVectorColour;
+      if (b.dx == 0.f && b.dy == 0.f) {
+        plot(out, static_cast<int>(cx), static_cast<int>(cy), colour);
+      } else {
+        drawArrow(out, cx, cy, cx + arrow_scale * b.dx, cy + arrow_scale * b.dy, colour);
+      }
+    }
+  }
+}
+
+int runMv(const MvOptions& opts) {
+  using namespace voca::decode;
+  if (opts.format != "png" && opts.format != "mp4") {
+    throw voca::InputError("--format '" + opts.format + "': expected png or mp4");
+  }
+  if (opts.camera < 0 || opts.camera > 1) {
+    throw voca::InputError("--camera " + std::to_string(opts.camera) + ": expected 0 or 1");
+  }
+  const FrameRange range = parseFrameRange(opts.frames);
+  DecoderOptions decoder_options;
+  decoder_options.backend = parseBackend(opts.decoder);
+
+  std::unique_ptr<VideoReader> reader;
+  if (fs::is_directory(opts.input)) {
+    const voca::Dataset dataset = voca::openDataset(opts.input);
+    if (dataset.layout != voca::DatasetLayout::kVocaVideo) {
+      throw voca::InputError(opts.input + ": a " + std::string(voca::layoutName(dataset.layout)) +
+                             " image dataset, not a video; expected mav0/camN/data.mp4 or a video file");
+    }
+    for (const std::string& warning : dataset.warnings) fmt::print(stderr, "warning: {}\n", warning);
+    reader = std::make_unique<VideoReader>(opts.camera == 0 ? dataset.video_left : dataset.video_right,
+                                           datasetTimestamps(dataset), decoder_options);
+  } else {
+    reader = std::make_unique<VideoReader>(opts.input, std::vector<std::int64_t>{}, decoder_options);
+  }
+
+  fs::create_directories(opts.out);
+  std::unique_ptr<RgbVideoWriter> video;
+  if (opts.format == "mp4") {
+    const StreamInfo& info = reader->stream();
+    video = std::make_unique<RgbVideoWriter>(fs::path(opts.out) / "mv.mp4",
+                                             info.frame_rate_num > 0 ? info.frame_rate_num : 30,
+                                             info.frame_rate_num > 0 ? info.frame_rate_den : 1);
+  }
+
+  DecodedFrame frame;
+  frame.reserve(reader->stream().width, reader->stream().height);
+  RgbImage canvas(reader->stream().width, reader->stream().height);
+  int written = 0;
+  std::int64_t total_vectors = 0, total_outliers = 0;
+  const std::int64_t expected = reader->expectedFrames();
+  while (reader->next(frame)) {
+    if (frame.frame_index < range.first) continue;  // decoded anyway: later P-frames refer to it
+    if (frame.frame_index >= range.end) break;
+    const int outliers = frame.motion.flagOutliers(opts.outliers);
+    total_vectors += static_cast<std::int64_t>(frame.motion.blocks().size());
+    total_outliers += outliers;
+    render(frame, opts.arrow_scale, canvas);
+    if (video) {
+      video->write(canvas.view());
+    } else {
+      voca::writePngRgb(fs::path(opts.out) / fmt::format("mv_{:06d}.png", frame.frame_index), canvas.view());
+    }
+    ++written;
+    fmt::print(stderr, "\rframe {}{} ({}): {} vectors, {} flagged    ", frame.frame_index,
+               expected > 0 ? fmt::format("/{}", expected) : std::string(), voca::pictureTypeName(frame.type),
+               frame.motion.blocks().size(), outliers);
+  }
+  if (video) video->finish();
+  fmt::print(stderr, "\n");
+  if (written == 0) throw voca::InputError("--frames '" + opts.frames + "': no frame of the video is in this range");
+  fmt::print("{}: wrote {} frame(s) to {} ({} vectors, {} flagged as likely outliers)\n", reader->path().string(),
+             written, opts.format == "mp4" ? (fs::path(opts.out) / "mv.mp4").string() : opts.out, total_vectors,
+             total_outliers);
+  return 0;
+}
+
+const bool registered = voca::cli::registerCommand({
+    .name = "mv",
+    .summary = "Render the codec's motion vectors and block partitions (outliers highlighted)",
+    .order = 30,
+    .configure = [](CLI::App& app) -> voca::cli::Runner {
+      auto opts = std::make_shared<MvOptions>();
+      app.add_option("input", opts->input, "A video file, or a VOCA video dataset folder (mav0/camN/data.mp4)")
+          ->required();
+      app.add_option("--out", opts->out, "Output folder (created)")->required();
+      app.add_option("--camera", opts->camera, "Camera of a dataset folder: 0 or 1")->capture_default_str();
+      app.add_option("--frames", opts->frames, "Frame range a:b (a inclusive, b exclusive; either may be omitted)");
+      app.add_option("--format", opts->format, "png (one mv_<frame>.png per frame) or mp4 (mv.mp4)")
+          ->capture_default_str();
+      app.add_option("--decoder", opts->decoder, "Decoder backend: auto, software, vaapi, v4l2m2m")
+          ->capture_default_str();
+      app.add_option("--arrow-scale", opts->arrow_scale, "Multiply arrow lengths by this for visibility")
+          ->capture_default_str();
+      app.add_option("--outlier-radius", opts->outliers.radius_px,
+                     "Neighbourhood (box radius, px) whose median a vector is compared with")
+          ->capture_default_str();
+      app.add_option("--outlier-threshold", opts->outliers.abs_threshold_px,
+                     "Flag a vector deviating from the median by more than this many px ...")
+          ->capture_default_str();
+      app.add_option("--outlier-relative", opts->outliers.rel_threshold,
+                     "... or by more than this fraction of the median's length, whichever is larger")
+          ->capture_default_str();
+      app.footer(
+          "Gray frame as RGB; blue: block partitions of inter blocks (intra blocks and I-frames have none);\n"
+          "green arrows: forward flow of each block (the codec vector negated), starting at the block centre;\n"
+          "red: vectors deviating from the median of their neighbourhood (likely not true motion).");
+      return [opts] { return runMv(*opts); };
+    },
+});
+
+}  // namespace
