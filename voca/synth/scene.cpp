@@ -64,6 +64,7 @@ void Scene::setWallMaterial(int wall, int material) { wall_material_[wall] = mat
 void Scene::addBox(const BoxObject& box) {
   boxes_.push_back(box);
   box_cos_sin_.emplace_back(std::cos(box.yaw), std::sin(box.yaw));
+  box_radius2_.push_back(box.half_size.squaredNorm());
 }
 
 bool Scene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, Hit& hit) const {
@@ -78,9 +79,17 @@ bool Scene::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir,
 
   for (std::size_t k = 0; k < boxes_.size(); ++k) {
     const BoxObject& box = boxes_[k];
+    const Eigen::Vector3f d = origin - box.center;
+    // Bounding sphere: most rays miss most boxes, and this rejects them in a few operations
+    // (the line misses the sphere, the sphere is behind the origin, or beyond the nearest hit so far).
+    const float r2 = box_radius2_[k];
+    const float along = -d.dot(dir);
+    const float dist2 = d.squaredNorm();
+    if (dist2 - along * along > r2) continue;
+    if (along < 0.0f && dist2 > r2) continue;
+    if (along > best.t && (along - best.t) * (along - best.t) > r2) continue;
     const float cs = box_cos_sin_[k].x();
     const float sn = box_cos_sin_[k].y();
-    const Eigen::Vector3f d = origin - box.center;
     const Eigen::Vector3f lo(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y(), d.z());
     const Eigen::Vector3f ld(cs * dir.x() + sn * dir.y(), -sn * dir.x() + cs * dir.y(), dir.z());
     float t_near = -std::numeric_limits<float>::infinity();

@@ -110,6 +110,7 @@ class Scene {
   std::vector<ProceduralTexture> materials_;
   std::vector<BoxObject> boxes_;
   std::vector<Eigen::Vector2f> box_cos_sin_;  // of each box's yaw, so rays need no trigonometry
+  std::vector<float> box_radius2_;            // squared bounding-sphere radius, for a cheap rejection test
   std::vector<CylinderObject> cylinders_;
   std::vector<DiscObject> discs_;
   std::vector<PointLight> lights_;
