@@ -19,6 +19,7 @@ extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
 #include <libavutil/error.h>
+#include <libavutil/log.h>
 #include <libavutil/mem.h>
 #include <libavutil/opt.h>
 }
@@ -84,6 +85,8 @@ class TempDir {
 };
 
 }  // namespace
+
+void silenceCodecLogs() { av_log_set_level(AV_LOG_ERROR); }
 
 std::int64_t parseBitrate(std::string_view text) {
   const auto bad = [&] {

@@ -36,6 +36,9 @@ struct EncoderSettings {
   bool global_header = false;  // codec headers out of band (extradata) as .mp4 needs; in band for raw streams
 };
 
+// Limits libav's console messages to errors (libx264 prints its statistics at info level).
+void silenceCodecLogs();
+
 // Parses "500k", "1M", "1.5M", "1000000" (bits per second; k = 1000, M = 1000000).
 // Throws InputError on anything else, including zero and negative rates.
 std::int64_t parseBitrate(std::string_view text);

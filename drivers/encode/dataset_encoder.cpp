@@ -1,0 +1,272 @@
+// Datasets -> VOCA video folders.
+
+#include "drivers/encode/dataset_encoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <system_error>
+
+#include <fmt/core.h>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+}
+
+#include "voca/calib/calibration.h"
+#include "voca/core/error.h"
+#include "voca/image/png_io.h"
+#include "voca/trajectory/trajectory.h"
+
+namespace voca::encode {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Decodes a video file and hands out its Y planes: the input side when re-encoding a VOCA video
+// folder. The Y plane is what our tracker sees, so it is re-encoded as is (no range conversion).
+void decodeLuma(const fs::path& path, int max_frames, const std::function<void(GrayView)>& emit) {
+  AVFormatContext* format = nullptr;
+  if (avformat_open_input(&format, path.c_str(), nullptr, nullptr) < 0) {
+    throw InputError(fmt::format("{}: cannot open the video", path.string()));
+  }
+  struct Cleanup {
+    AVFormatContext** format;
+    AVCodecContext* ctx = nullptr;
+    AVPacket* packet = nullptr;
+    AVFrame* frame = nullptr;
+    ~Cleanup() {
+      av_frame_free(&frame);
+      av_packet_free(&packet);
+      avcodec_free_context(&ctx);
+      avformat_close_input(format);
+    }
+  } cleanup{&format};
+  if (avformat_find_stream_info(format, nullptr) < 0) {
+    throw InputError(fmt::format("{}: cannot read the stream information", path.string()));
+  }
+  const AVCodec* codec = nullptr;
+  const int index = av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
+  if (index < 0 || codec == nullptr) throw InputError(fmt::format("{}: no decodable video stream", path.string()));
+  cleanup.ctx = avcodec_alloc_context3(codec);
+  cleanup.packet = av_packet_alloc();
+  cleanup.frame = av_frame_alloc();
+  if (!cleanup.ctx || !cleanup.packet || !cleanup.frame) throw RuntimeFailure("out of memory opening a decoder");
+  avcodec_parameters_to_context(cleanup.ctx, format->streams[index]->codecpar);
+  if (avcodec_open2(cleanup.ctx, codec, nullptr) < 0) {
+    throw InputError(fmt::format("{}: cannot open the {} decoder", path.string(), codec->name));
+  }
+  int emitted = 0;
+  const auto receive = [&] {
+    while (emitted < max_frames && avcodec_receive_frame(cleanup.ctx, cleanup.frame) == 0) {
+      const AVFrame& f = *cleanup.frame;
+      emit(GrayView{f.data[0], f.width, f.height, f.linesize[0]});
+      ++emitted;
+      av_frame_unref(cleanup.frame);
+    }
+  };
+  while (emitted < max_frames && av_read_frame(format, cleanup.packet) >= 0) {
+    if (cleanup.packet->stream_index == index) {
+      const int ret = avcodec_send_packet(cleanup.ctx, cleanup.packet);
+      av_packet_unref(cleanup.packet);
+      if (ret < 0) throw InputError(fmt::format("{}: corrupt packet after frame {}", path.string(), emitted));
+      receive();
+    } else {
+      av_packet_unref(cleanup.packet);
+    }
+  }
+  avcodec_send_packet(cleanup.ctx, nullptr);
+  receive();
+  if (emitted < max_frames) {
+    throw InputError(fmt::format("{}: holds {} frames but data.csv lists {}", path.string(), emitted, max_frames));
+  }
+}
+
+std::int64_t fileSize(const fs::path& path) {
+  std::error_code error;
+  const auto size = fs::file_size(path, error);
+  return error ? 0 : static_cast<std::int64_t>(size);
+}
+
+void createFolder(const fs::path& folder) {
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error || !fs::is_directory(folder)) {
+    throw InputError(fmt::format("cannot create the output folder {}: {}", folder.string(),
+                                 error ? error.message() : "a file of that name exists"));
+  }
+}
+
+}  // namespace
+
+void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den) {
+  if (dataset.frames.size() < 2) {
+    throw InputError(fmt::format("{}: a frame rate needs at least two frames", dataset.root.string()));
+  }
+  std::vector<std::int64_t> intervals;
+  for (std::size_t i = 1; i < dataset.frames.size(); ++i) {
+    intervals.push_back(dataset.frames[i].t_ns - dataset.frames[i - 1].t_ns);
+  }
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const double interval_ns = static_cast<double>(intervals[intervals.size() / 2]);
+  if (interval_ns <= 0) throw InputError(fmt::format("{}: timestamps do not increase", dataset.root.string()));
+  const double fps = 1e9 / interval_ns;
+  // Clock jitter of a few microseconds per frame stays far below 0.05 %.
+  const auto near = [](double value, double whole) { return whole >= 1.0 && std::fabs(value - whole) <= 5e-4 * value; };
+  if (near(fps, std::round(fps))) {
+    fps_num = static_cast<int>(std::round(fps));
+    fps_den = 1;
+  } else if (near(fps * 1.001, std::round(fps * 1.001))) {  // NTSC-style rates, which MPEG-2 requires exactly
+    fps_num = static_cast<int>(std::round(fps * 1.001)) * 1000;
+    fps_den = 1001;
+  } else {
+    const int millihertz = static_cast<int>(std::lround(fps * 1000.0));
+    const int divisor = std::gcd(millihertz, 1000);
+    fps_num = millihertz / divisor;
+    fps_den = 1000 / divisor;
+  }
+}
+
+DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, const DatasetEncodeOptions& options,
+                                  const DatasetEncodeProgress& progress) {
+  const Dataset dataset = openDataset(input);
+  DatasetEncodeReport report;
+  report.input_layout = dataset.layout;
+  report.num_frames = static_cast<int>(dataset.frames.size());
+  report.warnings = dataset.warnings;
+
+  if (options.cameras.empty()) throw InputError("no camera selected (--cameras takes 0, 1 or 0,1)");
+  for (std::size_t i = 0; i < options.cameras.size(); ++i) {
+    const int camera = options.cameras[i];
+    if (camera != 0 && camera != 1) {
+      throw InputError(fmt::format("camera {}: a stereo dataset has cameras 0 (left) and 1 (right)", camera));
+    }
+    if (std::count(options.cameras.begin(), options.cameras.end(), camera) > 1) {
+      throw InputError(fmt::format("camera {} is listed twice", camera));
+    }
+  }
+  std::error_code same_error;
+  if (fs::exists(out) && fs::equivalent(out, dataset.root, same_error)) {
+    throw InputError(fmt::format("the output folder {} is the input dataset; choose another folder", out.string()));
+  }
+  if (fs::exists(out) && fs::equivalent(out, dataset.root / "mav0", same_error)) {
+    throw InputError(
+        fmt::format("the output folder {} is inside the input dataset; choose another folder", out.string()));
+  }
+
+  EncoderSettings settings = options.settings;
+  if (options.use_dataset_fps) datasetFrameRate(dataset, settings.fps_num, settings.fps_den);
+  report.fps_num = settings.fps_num;
+  report.fps_den = settings.fps_den;
+
+  // Load the calibration before the long encoding so that a bad file fails early.
+  std::optional<StereoRig> rig;
+  if (options.calibration) {
+    rig = loadCalibration(*options.calibration);
+  } else if (dataset.calibration) {
+    rig = loadCalibration(*dataset.calibration);
+  }
+
+  const fs::path mav0 = out / "mav0";
+  for (int camera : options.cameras) {
+    const fs::path cam_dir = mav0 / fmt::format("cam{}", camera);
+    createFolder(cam_dir);
+    CameraEncodeReport cam_report;
+    cam_report.camera = camera;
+    cam_report.video = cam_dir / "data.mp4";
+
+    FrameSource source;
+    if (dataset.layout == DatasetLayout::kVocaVideo) {
+      const fs::path video = camera == 0 ? dataset.video_left : dataset.video_right;
+      cam_report.input_bytes = fileSize(video);
+      source = [&, video](const std::function<void(GrayView)>& emit) { decodeLuma(video, report.num_frames, emit); };
+    } else {
+      for (const StereoFrameRef& frame : dataset.frames) {
+        cam_report.input_bytes += fileSize(camera == 0 ? frame.left : frame.right);
+      }
+      source = [&, camera](const std::function<void(GrayView)>& emit) {
+        GrayImage image;
+        for (const StereoFrameRef& frame : dataset.frames) {
+          readPngGray(camera == 0 ? frame.left : frame.right, image);
+          emit(image.view());
+        }
+      };
+    }
+    std::int64_t raw_bytes = 0;
+    const FrameSource counted = [&](const std::function<void(GrayView)>& emit) {
+      raw_bytes = 0;
+      source([&](GrayView image) {
+        raw_bytes += static_cast<std::int64_t>(image.width) * image.height;
+        emit(image);
+      });
+    };
+    cam_report.result =
+        encodeVideoFile(cam_report.video, settings, counted, [&](int pass, int num_passes, int frame_index) {
+          if (progress) progress(camera, pass, num_passes, frame_index, report.num_frames);
+        });
+
+    // The frames of the video, in order, with their original timestamps.
+    const fs::path csv_path = cam_dir / "data.csv";
+    std::ofstream csv(csv_path);
+    csv << "#timestamp [ns],filename\n";
+    for (const StereoFrameRef& frame : dataset.frames) csv << frame.t_ns << ',' << frame.t_ns << ".png\n";
+    csv.close();
+    if (!csv) throw InputError(fmt::format("cannot write {}", csv_path.string()));
+
+    report.input_bytes += cam_report.input_bytes;
+    report.output_bytes += cam_report.result.file_bytes;
+    report.raw_bytes += raw_bytes;
+    report.cameras.push_back(std::move(cam_report));
+  }
+
+  if (dataset.ground_truth) {
+    const fs::path gt_dir = mav0 / "state_groundtruth_estimate0";
+    createFolder(gt_dir);
+    const fs::path gt_out = gt_dir / "data.csv";
+    if (dataset.layout == DatasetLayout::kKitti) {
+      // KITTI poses have no timestamps of their own: pair them with times.txt. With a KITTI
+      // calibration the body frame is cam0, so the camera pose is the body pose.
+      const Trajectory poses =
+          loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
+      saveTrajectory(poses, gt_out, TrajectoryFormat::kEuroc);
+    } else {
+      std::error_code error;
+      fs::copy_file(*dataset.ground_truth, gt_out, fs::copy_options::overwrite_existing, error);
+      if (error)
+        throw InputError(
+            fmt::format("cannot copy {} to {}: {}", dataset.ground_truth->string(), gt_out.string(), error.message()));
+    }
+    report.ground_truth_written = gt_out;
+  }
+
+  if (rig) {
+    // Odd image sizes are coded as their even crop: the intrinsics stay valid, the size shrinks.
+    for (const CameraEncodeReport& cam : report.cameras) {
+      if (cam.camera >= static_cast<int>(rig->cameras.size())) continue;
+      CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
+      if ((calib.width & ~1) == cam.result.width && (calib.height & ~1) == cam.result.height) {
+        calib.width = cam.result.width;
+        calib.height = cam.result.height;
+      } else {
+        report.warnings.push_back(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}",
+                                              cam.camera, calib.width, calib.height, cam.result.width,
+                                              cam.result.height));
+      }
+    }
+    const fs::path calib_out = out / "calib.json";
+    saveBasaltCalibration(*rig, calib_out);
+    report.calibration_written = calib_out;
+  } else {
+    report.warnings.push_back("no calibration found with the dataset and none given (--calib): no calib.json written");
+  }
+  if (options.cameras.size() < 2) {
+    report.warnings.push_back("only one camera encoded: the folder is not a stereo VOCA video dataset");
+  }
+  return report;
+}
+
+}  // namespace voca::encode

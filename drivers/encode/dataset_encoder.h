@@ -1,0 +1,64 @@
+#pragma once
+// Datasets -> the VOCA video layout: one .mp4 per camera with the original timestamps in data.csv,
+// ground truth and calibration beside them (what `voca encode` does).
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/encode/video_encoder.h"
+
+namespace voca::encode {
+
+// What to encode and how.
+struct DatasetEncodeOptions {
+  EncoderSettings settings;                          // its frame rate is used unless use_dataset_fps
+  bool use_dataset_fps = false;                      // encode at the dataset's own rate (median frame interval)
+  std::vector<int> cameras = {0, 1};                 // 0 = left, 1 = right
+  std::optional<std::filesystem::path> calibration;  // overrides the one found with the dataset
+};
+
+// One encoded camera.
+struct CameraEncodeReport {
+  int camera = 0;
+  std::filesystem::path video;
+  std::int64_t input_bytes = 0;  // the camera's PNG files, or its input video
+  EncodeResult result;
+};
+
+// What encodeDataset did.
+struct DatasetEncodeReport {
+  DatasetLayout input_layout = DatasetLayout::kEuroc;
+  int num_frames = 0;
+  int fps_num = 0, fps_den = 1;  // the rate the videos were encoded at
+  std::vector<CameraEncodeReport> cameras;
+  std::int64_t input_bytes = 0;   // all encoded cameras
+  std::int64_t output_bytes = 0;  // all videos
+  std::int64_t raw_bytes = 0;     // frames x width x height of the input: uncompressed 8-bit size
+  std::optional<std::filesystem::path> calibration_written;
+  std::optional<std::filesystem::path> ground_truth_written;
+  std::vector<std::string> warnings;
+};
+
+// Called per frame: camera, pass (1-based), number of passes, frame index, number of frames.
+using DatasetEncodeProgress = std::function<void(int camera, int pass, int num_passes, int frame, int num_frames)>;
+
+// The dataset's frame rate as a rational, from the median frame interval: a whole rate when within
+// 0.05 % of one (EuRoC's 20 Hz), an NTSC rate N*1000/1001 likewise, else millihertz precision.
+void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den);
+
+// Encodes a raw EuRoC / TUM-VI / KITTI dataset, or re-encodes a VOCA video folder, into
+// <out>/mav0/camN/data.mp4 + data.csv (`#timestamp [ns],filename`, filename <t_ns>.png as the
+// official VOCA layout has it). Ground truth is copied to mav0/state_groundtruth_estimate0/data.csv
+// (KITTI poses converted to EuRoC csv with times.txt); the calibration, if the dataset or
+// options.calibration provides one, is written as Basalt JSON to <out>/calib.json with the coded
+// image size. Throws InputError for an unknown or missing dataset, bad options, an output folder
+// that cannot be written or that is the input itself.
+DatasetEncodeReport encodeDataset(const std::filesystem::path& input, const std::filesystem::path& out,
+                                  const DatasetEncodeOptions& options, const DatasetEncodeProgress& progress = {});
+
+}  // namespace voca::encode

@@ -1,0 +1,138 @@
+// Encoder and `voca encode` logic on bad input: clear InputErrors, no crash, no half-written files.
+
+#include <fstream>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/encode/dataset_encoder.h"
+#include "drivers/encode/video_encoder.h"
+#include "tests/test_support.h"
+#include "voca/core/error.h"
+#include "voca/image/png_io.h"
+
+using namespace voca;
+using namespace voca::encode;
+
+namespace {
+
+std::string inputErrorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no InputError>";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+FrameSource framesOfSizes(std::vector<std::pair<int, int>> sizes) {
+  return [sizes](const std::function<void(GrayView)>& emit) {
+    for (const auto& [w, h] : sizes) {
+      GrayImage image(w, h, 100);
+      emit(image.view());
+    }
+  };
+}
+
+}  // namespace
+
+TEST_CASE("bad bitrate strings are InputErrors naming the text") {
+  for (const char* text : {"abc", "", "k", "-500k", "0", "500kb", "1e6", "5 00k", "1.2.3M", ".", "10"}) {
+    CAPTURE(text);
+    const std::string message = inputErrorOf([&] { parseBitrate(text); });
+    CHECK(contains(message, "bitrate"));
+    CHECK(contains(message, std::string("'") + text + "'"));
+  }
+}
+
+TEST_CASE("frames of different sizes stop the encode and leave no file") {
+  test::ScratchDir dir("encode-bad-sizes");
+  const auto path = dir / "v.mp4";
+  EncoderSettings settings;
+  const std::string message = inputErrorOf([&] {
+    encodeVideoFile(path, settings, framesOfSizes({{64, 48}, {64, 48}, {80, 48}}));
+  });
+  CHECK(contains(message, "80x48"));
+  CHECK(contains(message, "64x48"));
+  CHECK(!std::filesystem::exists(path));
+}
+
+TEST_CASE("encoder settings and outputs that cannot work are InputErrors") {
+  test::ScratchDir dir("encode-bad-settings");
+  EncoderSettings settings;
+  settings.two_pass = false;
+  const FrameSource three = framesOfSizes({{64, 48}, {64, 48}, {64, 48}});
+
+  CHECK(contains(inputErrorOf([&] { encodeVideoFile(dir / "none.mp4", settings, framesOfSizes({})); }), "no frames"));
+  CHECK(!std::filesystem::exists(dir / "none.mp4"));
+  CHECK(contains(inputErrorOf([&] { encodeVideoFile(dir / "missing" / "sub" / "v.mp4", settings, three); }),
+                 "cannot write"));
+
+  EncoderSettings codec = settings;
+  codec.codec = "libx265";
+  CHECK(contains(inputErrorOf([&] { encodeVideoFile(dir / "a.mp4", codec, three); }), "libx265"));
+
+  EncoderSettings rate = settings;
+  rate.codec = "mpeg2video";
+  rate.fps_num = 23;  // MPEG-2 only has the standard rates
+  CHECK(contains(inputErrorOf([&] { encodeVideoFile(dir / "b.mp4", rate, three); }), "23/1"));
+
+  EncoderSettings params = settings;
+  params.x264_params = "keyint=1000:no-such-option=3";
+  CHECK(!inputErrorOf([&] { encodeVideoFile(dir / "c.mp4", params, three); }).empty());
+
+  CHECK(contains(inputErrorOf([&] { encodeVideoFile(dir / "d.mp4", settings, framesOfSizes({{8, 8}})); }), "8x8"));
+
+  VideoEncoder encoder;
+  encoder.open(settings, 64, 48);
+  GrayImage wrong(32, 48, 0);
+  CHECK(contains(inputErrorOf([&] { encoder.encode(wrong.view(), 0); }), "32x48"));
+}
+
+TEST_CASE("dataset problems are InputErrors naming the folder") {
+  test::ScratchDir dir("encode-bad-dataset");
+  DatasetEncodeOptions options;
+  options.settings.two_pass = false;
+
+  const auto missing = dir / "no-such-dataset";
+  CHECK(contains(inputErrorOf([&] { encodeDataset(missing, dir / "out", options); }), missing.string()));
+
+  std::filesystem::create_directories(dir / "empty");
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "empty", dir / "out", options); }), "unknown dataset layout"));
+
+  // A tiny valid EuRoC folder to break in other ways.
+  {
+    EurocWriter writer(dir / "raw");
+    GrayImage image(64, 48, 90);
+    const GrayView views[2] = {image.view(), image.view()};
+    for (std::int64_t t : {1000000000LL, 1050000000LL, 1100000000LL}) writer.addFrame(t, views);
+    writer.finish();
+  }
+  DatasetEncodeOptions cameras = options;
+  cameras.cameras = {0, 2};
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out", cameras); }), "camera 2"));
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "raw", options); }), "input dataset"));
+
+  // The output folder cannot be created where a file is.
+  std::ofstream(dir / "file-not-folder") << "x";
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "file-not-folder", options); }),
+                 "cannot create the output folder"));
+
+  // A missing --calib file fails before any encoding.
+  DatasetEncodeOptions calib = options;
+  calib.calibration = dir / "nope.json";
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-calib", calib); }), "nope.json"));
+  CHECK(!std::filesystem::exists(dir / "out-calib" / "mav0" / "cam0" / "data.mp4"));
+
+  // A corrupt PNG is reported with its file name.
+  const Dataset raw = openDataset(dir / "raw");
+  std::ofstream(raw.frames[1].left, std::ios::binary | std::ios::trunc) << "not a png";
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-png", options); }),
+                 raw.frames[1].left.filename().string()));
+  CHECK(!std::filesystem::exists(dir / "out-png" / "mav0" / "cam0" / "data.mp4"));
+
+  // An image of another size within one camera.
+  writePngGray(raw.frames[1].left, GrayImage(80, 48, 90).view());
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-size", options); }), "80x48"));
+  CHECK(!std::filesystem::exists(dir / "out-size" / "mav0" / "cam0" / "data.mp4"));
+}

@@ -1,0 +1,152 @@
+// `voca encode`: a raw stereo dataset (or a VOCA video folder) -> the VOCA video layout, with the
+// paper's two-pass constant-bitrate H.264 encoding.
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/core.h>
+
+#include "drivers/encode/dataset_encoder.h"
+#include "tools/voca/command.h"
+#include "voca/core/error.h"
+
+namespace {
+
+struct EncodeOptions {
+  std::string dataset;
+  std::string out;
+  std::string bitrate = "500k";
+  std::string fps = "30";
+  std::string cameras = "0,1";
+  std::string codec = "libx264";
+  std::string calib;
+  bool single_pass = false;
+};
+
+// "0,1" -> {0, 1}.
+std::vector<int> parseCameras(const std::string& text) {
+  std::vector<int> cameras;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    if (item != "0" && item != "1") {
+      throw voca::InputError(fmt::format("--cameras '{}': expected a comma-separated list of 0 and 1, e.g. 0,1", text));
+    }
+    cameras.push_back(item[0] - '0');
+    start = comma + 1;
+  }
+  return cameras;
+}
+
+// "30", "20", "30000/1001" or "dataset".
+void parseFps(const std::string& text, voca::encode::DatasetEncodeOptions& options) {
+  if (text == "dataset") {
+    options.use_dataset_fps = true;
+    return;
+  }
+  const auto bad = [&] {
+    return voca::InputError(
+        fmt::format("--fps '{}': expected 'dataset', a whole rate such as 30, or a fraction such as 30000/1001", text));
+  };
+  const auto parsePositive = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos) throw bad();
+    const int value = std::stoi(digits);
+    if (value <= 0) throw bad();
+    return value;
+  };
+  const std::size_t slash = text.find('/');
+  options.settings.fps_num = parsePositive(text.substr(0, slash));
+  options.settings.fps_den = slash == std::string::npos ? 1 : parsePositive(text.substr(slash + 1));
+}
+
+std::string megabytes(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
+
+int runEncode(const EncodeOptions& cli) {
+  using namespace voca::encode;
+  DatasetEncodeOptions options;
+  options.settings.codec = cli.codec;
+  options.settings.bitrate_bps = parseBitrate(cli.bitrate);
+  options.settings.two_pass = !cli.single_pass;
+  parseFps(cli.fps, options);
+  options.cameras = parseCameras(cli.cameras);
+  if (!cli.calib.empty()) options.calibration = cli.calib;
+  silenceCodecLogs();
+
+  const auto start = std::chrono::steady_clock::now();
+  int last_percent = -1;
+  const DatasetEncodeReport report =
+      encodeDataset(cli.dataset, cli.out, options, [&](int camera, int pass, int passes, int frame, int frames) {
+        const int percent = 100 * (frame + 1) / frames;
+        if (percent == last_percent && frame + 1 != frames) return;
+        last_percent = percent;
+        fmt::print(stderr, "\rcam{} pass {}/{}: frame {}/{} ({}%)   ", camera, pass, passes, frame + 1, frames,
+                   percent);
+        if (frame + 1 == frames) fmt::print(stderr, "\n");
+      });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  for (const std::string& warning : report.warnings) fmt::print(stderr, "warning: {}\n", warning);
+  fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
+             report.num_frames);
+  fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {}/{} fps, {})\n", cli.out, cli.codec,
+             options.settings.bitrate_bps, report.fps_num, report.fps_den,
+             options.settings.two_pass ? "two-pass" : "one-pass");
+  for (const CameraEncodeReport& cam : report.cameras) {
+    const EncodeResult& r = cam.result;
+    std::string pass_times;
+    for (std::size_t p = 0; p < r.pass_ms_per_frame.size(); ++p) {
+      pass_times += fmt::format("{}pass {} {:.2f} ms/frame", p == 0 ? "" : ", ", p + 1, r.pass_ms_per_frame[p]);
+    }
+    fmt::print("cam{}       {}x{}, {} -> {} ({:.1f}x), achieved {:.1f} kbit/s, {} keyframe(s), encode {}\n", cam.camera,
+               r.width, r.height, megabytes(cam.input_bytes), megabytes(r.file_bytes),
+               static_cast<double>(cam.input_bytes) / static_cast<double>(r.file_bytes),
+               r.achieved_bitrate_bps / 1000.0, r.num_keyframes, pass_times);
+  }
+  fmt::print("total      {} -> {}: compression ratio {:.1f}x ({:.1f}x against raw 8-bit frames)\n",
+             megabytes(report.input_bytes), megabytes(report.output_bytes),
+             static_cast<double>(report.input_bytes) / static_cast<double>(report.output_bytes),
+             static_cast<double>(report.raw_bytes) / static_cast<double>(report.output_bytes));
+  if (report.ground_truth_written) fmt::print("ground truth -> {}\n", report.ground_truth_written->string());
+  if (report.calibration_written) fmt::print("calibration  -> {}\n", report.calibration_written->string());
+  fmt::print("done in {:.1f} s\n", seconds);
+  return 0;
+}
+
+const bool registered = voca::cli::registerCommand(
+    {.name = "encode",
+     .summary = "Encode a stereo dataset into the VOCA video layout (one H.264 .mp4 per camera)",
+     .order = 20,
+     .configure = [](CLI::App& app) -> voca::cli::Runner {
+       auto options = std::make_shared<EncodeOptions>();
+       app.description(
+           "Encodes a raw EuRoC / TUM-VI / KITTI dataset, or re-encodes a VOCA video folder, into\n"
+           "<out>/mav0/camN/data.mp4 + data.csv (original timestamps), with ground truth and calib.json.\n"
+           "Default: the VOCA paper's encoding (libx264, two-pass 500 kbit/s, 30 fps, yuv420p,\n"
+           "partitions=p8x8,p4x4,i8x8:keyint=1000:me=umh:merange=64:subme=6:bframes=0:ref=1).");
+       app.add_option("dataset", options->dataset,
+                      "Input dataset folder (EuRoC/TUM-VI root or mav0, KITTI sequence, "
+                      "or a VOCA video folder)")
+           ->required();
+       app.add_option("--out,-o", options->out, "Output folder (created; existing videos are overwritten)")->required();
+       app.add_option("--bitrate,-b", options->bitrate, "Target bitrate per camera: 500k, 1M, 1000000")
+           ->capture_default_str();
+       app.add_option("--fps", options->fps,
+                      "Encoding frame rate: a number (30, 20, 30000/1001) or 'dataset' for the dataset's own rate. "
+                      "The official VOCA code uses 30 for every dataset, so bits per frame = bitrate / 30")
+           ->capture_default_str();
+       app.add_option("--cameras", options->cameras, "Cameras to encode: 0, 1 or 0,1")->capture_default_str();
+       app.add_option("--codec", options->codec, "libx264 (H.264, the paper), mpeg4 (MPEG-4 Part 2) or mpeg2video")
+           ->capture_default_str()
+           ->check(CLI::IsMember({"libx264", "mpeg4", "mpeg2video"}));
+       app.add_option("--calib", options->calib,
+                      "Calibration to write as <out>/calib.json (Basalt .json, Kalibr .yaml, KITTI calib.txt); "
+                      "default: the one found with the dataset");
+       app.add_flag("--single-pass", options->single_pass, "One-pass rate control (faster, less exact bitrate)");
+       return [options] { return runEncode(*options); };
+     }});
+
+}  // namespace
