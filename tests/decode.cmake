@@ -1,0 +1,1 @@
+voca_add_test(test_decode SOURCES test_decode.cpp LIBS voca_drivers_decode voca_drivers_encode)
