@@ -1,0 +1,124 @@
+// Config files: the shipped configs load with the paper's values, and malformed or out-of-range
+// configs are rejected with messages naming the key and what was expected.
+
+#include <doctest/doctest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/test_support.h"
+#include "voca/config/config.h"
+#include "voca/core/error.h"
+
+using namespace voca;
+
+namespace {
+
+std::filesystem::path shippedConfig(const std::string& name) {
+  return std::filesystem::path(VOCA_SOURCE_DIR) / "configs" / name;
+}
+
+// The message of the InputError thrown by parsing `text` as a config ("" if none was thrown).
+std::string errorFor(const std::string& text) {
+  try {
+    parseConfig(nlohmann::json::parse(text), "test.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& haystack, const std::string& needle) {
+  return haystack.find(needle) != std::string::npos;
+}
+
+}  // namespace
+
+TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend values") {
+  const VocaConfig euroc = loadConfig(shippedConfig("euroc_vo.json"));
+  const FrontendConfig& e = euroc.frontend;
+  CHECK(e.grid_size_px == 40);
+  CHECK(e.pyramid_levels == 3);
+  CHECK(e.max_iterations == 5);
+  CHECK(e.pattern == 52);
+  CHECK(e.max_recovered_dist2_px2 == 0.25);
+  CHECK(e.epipolar_error == 0.005);
+  CHECK(e.matching_guess == StereoGuess::kFixedDepth);
+  CHECK(e.matching_default_depth_m == 2.0);
+  CHECK(e.image_safe_radius_px == 0.0);
+  CHECK(e.prior_mode == PriorMode::kMvParallelOf);
+  CHECK(e.consensus_tolerance_px2 == 0.05);
+  CHECK(e.bridge_iframes);
+  const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
+  CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
+  CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
+  CHECK(tumvi.frontend.pattern == 52);
+  // Missing keys and sections take the defaults, which are the EuRoC values.
+  const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
+  CHECK(empty.frontend.grid_size_px == e.grid_size_px);
+  CHECK(empty.frontend.prior_mode == e.prior_mode);
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_mode": "none", "pattern": 24}})"), "x")
+            .frontend.prior_mode == PriorMode::kNone);
+}
+
+TEST_CASE("config: unknown keys, wrong types and out-of-range values name the key and the allowed values") {
+  std::string message = errorFor(R"({"frontnd": {}})");
+  CHECK(contains(message, "test.json"));
+  CHECK(contains(message, "\"frontnd\""));
+  CHECK(contains(message, "known: frontend, backend"));
+
+  message = errorFor(R"({"frontend": {"grid_size": 40}})");
+  CHECK(contains(message, "frontend.grid_size: unknown key"));
+
+  message = errorFor(R"({"frontend": {"pattern": 30}})");
+  CHECK(contains(message, "frontend.pattern: expected 24 or 52, got 30"));
+
+  message = errorFor(R"({"frontend": {"grid_size_px": "40"}})");
+  CHECK(contains(message, "frontend.grid_size_px: expected an integer"));
+
+  message = errorFor(R"({"frontend": {"pyramid_levels": 9}})");
+  CHECK(contains(message, "frontend.pyramid_levels: expected an integer in [0, 6], got 9"));
+
+  message = errorFor(R"({"frontend": {"max_recovered_dist2_px2": 0}})");
+  CHECK(contains(message, "frontend.max_recovered_dist2_px2: expected a number in (0, 100], got 0"));
+
+  message = errorFor(R"({"frontend": {"consensus_tolerance_px2": -1}})");
+  CHECK(contains(message, "frontend.consensus_tolerance_px2: expected a number in [0,"));
+
+  message = errorFor(R"({"frontend": {"epipolar_error": 2.5}})");
+  CHECK(contains(message, "frontend.epipolar_error"));
+
+  message = errorFor(R"({"frontend": {"prior_mode": "mv||of"}})");
+  CHECK(contains(message, "frontend.prior_mode: expected one of"));
+  CHECK(contains(message, "mv_parallel_of"));
+
+  message = errorFor(R"({"frontend": {"matching_guess": "same_pixel"}})");
+  CHECK(contains(message, "frontend.matching_guess"));
+
+  message = errorFor(R"({"frontend": {"bridge_iframes": 1}})");
+  CHECK(contains(message, "frontend.bridge_iframes: expected true or false"));
+
+  message = errorFor(R"({"frontend": {"detection_min_threshold": 50}})");
+  CHECK(contains(message, "frontend.detection_min_threshold: expected an integer in [1, 40], got 50"));
+
+  message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
+  CHECK(contains(message, "frontend.max_iterations: expected an integer"));
+
+  CHECK(contains(errorFor(R"({"frontend": [1, 2]})"), "frontend: expected a JSON object"));
+  CHECK(contains(errorFor(R"([1, 2])"), "test.json: expected a JSON object"));
+  CHECK(contains(errorFor(R"({"backend": 3})"), "backend: expected a JSON object"));
+}
+
+TEST_CASE("config: unreadable and malformed files") {
+  voca::test::ScratchDir dir("frontend-config");
+  CHECK_THROWS_WITH_AS(loadConfig(dir / "missing.json"), doctest::Contains("cannot open"), InputError);
+  { std::ofstream(dir / "broken.json") << "{\"frontend\": {\"pattern\": 52,"; }
+  CHECK_THROWS_WITH_AS(loadConfig(dir / "broken.json"), doctest::Contains("broken.json: not valid JSON"), InputError);
+  { std::ofstream(dir / "empty.json") << ""; }
+  CHECK_THROWS_AS(loadConfig(dir / "empty.json"), InputError);
+  { std::ofstream(dir / "bad_value.json") << R"({"frontend": {"grid_size_px": 2}})"; }
+  CHECK_THROWS_WITH_AS(
+      loadConfig(dir / "bad_value.json"),
+      doctest::Contains("bad_value.json: frontend.grid_size_px: expected an integer in [8, 1024], got 2"), InputError);
+}

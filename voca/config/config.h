@@ -1,0 +1,32 @@
+#pragma once
+// The VOCA-RT configuration file: one JSON object with a "frontend" and a "backend" section, each
+// parsed and validated by its own function (unknown keys and out-of-range values are errors).
+
+#include <filesystem>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+#include "voca/frontend/frontend_config.h"
+
+namespace voca {
+
+// Everything a run is configured with. Sections missing from the file keep their defaults (the
+// paper's EuRoC values).
+struct VocaConfig {
+  FrontendConfig frontend;
+  // BACKEND SECTION: helper "backend" adds its config struct here (see parseConfig()).
+};
+
+// Reads and validates a config file. Throws InputError naming the file and the key, e.g.
+// "configs/x.json: frontend.pattern: expected 24 or 52, got 30".
+VocaConfig loadConfig(const std::filesystem::path& file);
+
+// Validates an already parsed document; `context` prefixes error messages (usually the file name).
+VocaConfig parseConfig(const nlohmann::json& root, const std::string& context);
+
+// The "frontend" section. Every key is optional (default = paper value), unknown keys are errors,
+// and each value is checked for type and range. `context` names the section in messages, e.g.
+// "file.json: frontend".
+FrontendConfig parseFrontendConfig(const nlohmann::json& section, const std::string& context);
+
+}  // namespace voca
