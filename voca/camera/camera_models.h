@@ -204,15 +204,18 @@ class PinholeRadtan8Camera {
     distort(m, distorted, &jacobian, nullptr);
     Vec2 residual = distorted - target;
     const Scalar tight = camera_detail::tightTolerance<Scalar>(target.norm());
+    const Scalar loose = camera_detail::looseTolerance<Scalar>(target.norm());
     for (int iteration = 0; iteration < camera_detail::kMaxUnprojectIterations; ++iteration) {
       if (residual.norm() <= tight) break;
       Mat22 inverse;
       if (!camera_detail::invert2x2<Scalar>(jacobian, inverse)) return false;
       Vec2 step = -inverse * residual;
-      // Halving keeps a far-off first guess from jumping past the monotonic region; no decrease
-      // even for tiny steps means the residual is at its rounding floor.
+      // Halving keeps a far-off first guess from jumping past the monotonic region. Within the
+      // loose tolerance a full step that does not decrease the residual means it is at its
+      // rounding floor, so halving would only cost time.
+      const int max_halvings = residual.norm() > loose ? camera_detail::kMaxStepHalvings : 0;
       bool improved = false;
-      for (int halving = 0; halving <= camera_detail::kMaxStepHalvings && !improved; ++halving, step *= Scalar(0.5)) {
+      for (int halving = 0; halving <= max_halvings && !improved; ++halving, step *= Scalar(0.5)) {
         const Vec2 candidate = m + step;
         Vec2 candidate_distorted;
         Mat22 candidate_jacobian;
@@ -227,7 +230,7 @@ class PinholeRadtan8Camera {
       }
       if (!improved) break;
     }
-    if (!(residual.norm() <= camera_detail::looseTolerance<Scalar>(target.norm()))) return false;
+    if (!(residual.norm() <= loose)) return false;
     if (!(m.squaredNorm() <= max_radius_ * max_radius_)) return false;
 
     const Vec3 ray(m[0], m[1], Scalar(1));
@@ -425,8 +428,9 @@ class KannalaBrandt4Camera {
       const Scalar slope = distortionDerivative(theta);
       if (!(slope > Scalar(0))) break;
       Scalar step = -residual / slope;
+      const int max_halvings = std::abs(residual) > loose ? camera_detail::kMaxStepHalvings : 0;  // as in radtan8
       bool improved = false;
-      for (int halving = 0; halving <= camera_detail::kMaxStepHalvings && !improved; ++halving, step *= Scalar(0.5)) {
+      for (int halving = 0; halving <= max_halvings && !improved; ++halving, step *= Scalar(0.5)) {
         const Scalar candidate = std::clamp(theta + step, Scalar(0), max_theta_);
         const Scalar candidate_residual = distortion(candidate) - ru;
         if (std::abs(candidate_residual) < std::abs(residual)) {
