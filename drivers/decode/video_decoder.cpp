@@ -273,6 +273,8 @@ void VideoDecoder::Impl::drainMotion() {
 
 void VideoDecoder::send(const Packet& packet) {
   Impl& d = *impl_;
+  // An empty packet would mean "end of stream" to libavcodec; containers can carry empty samples.
+  if (packet.bytes.empty()) return;
   AVPacket* pkt = d.packet.get();
   av_packet_unref(pkt);
   // Not reference-counted: libavcodec copies the bytes into a padded buffer of its own.
