@@ -288,6 +288,12 @@ TEST_CASE("points behind the camera or outside the field of view are rejected") 
   CHECK_FALSE(PinholeRadtan8Camera<double>(eurocRadtan()).project(behind, uv));
   CHECK_FALSE(DoubleSphereCamera<double>(eurocDs()).project(behind, uv));
   CHECK_FALSE(ExtendedUnifiedCamera<double>(eurocEucm()).project(behind, uv));
+  // The camera centre itself has no direction.
+  CHECK_FALSE(PinholeCamera<double>(eurocPinhole()).project(Eigen::Vector3d::Zero(), uv));
+  CHECK_FALSE(PinholeRadtan8Camera<double>(eurocRadtan()).project(Eigen::Vector3d::Zero(), uv));
+  CHECK_FALSE(KannalaBrandt4Camera<double>(t265Kb4()).project(Eigen::Vector3d::Zero(), uv));
+  CHECK_FALSE(DoubleSphereCamera<double>(eurocDs()).project(Eigen::Vector3d::Zero(), uv));
+  CHECK_FALSE(ExtendedUnifiedCamera<double>(eurocEucm()).project(Eigen::Vector3d::Zero(), uv));
 
   SUBCASE("radtan stops where r * radial(r) stops increasing") {
     // k1 = -0.5 only: d/dr [r (1 - r^2/2)] = 1 - 1.5 r^2 vanishes at r = sqrt(2/3).

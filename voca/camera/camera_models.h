@@ -359,7 +359,8 @@ class KannalaBrandt4Camera {
     const Scalar r2 = x * x + y * y;
     const Scalar r = std::sqrt(r2);
     // Near the axis d(theta)/r = 1/z up to O((r/z)^2), which is below rounding here.
-    if (r < std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::abs(z)) {
+    // "<=" also sends the origin (r = z = 0) here, where it is rejected.
+    if (r <= std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::abs(z)) {
       if (!(z > Scalar(0))) return false;
       typename PinholeCamera<Scalar>::ParamJacobian d_uv_d_pinhole;
       PinholeCamera<Scalar>(params_.template head<4>()).project(p_cam, uv, d_uv_d_p, &d_uv_d_pinhole);
