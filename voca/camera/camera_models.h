@@ -314,7 +314,7 @@ class PinholeRadtan8Camera {
   }
 
   Params params_;
-  Scalar max_radius_;
+  Scalar max_radius_ = Scalar(0);
 };
 
 // Kannala-Brandt fisheye with four coefficients (Kalibr "equidistant"):
@@ -477,8 +477,8 @@ class KannalaBrandt4Camera {
   }
 
   Params params_;
-  Scalar max_theta_;
-  Scalar max_distorted_;
+  Scalar max_theta_ = Scalar(0);
+  Scalar max_distorted_ = Scalar(0);
 };
 
 // Double sphere model. d1 = |p|, d2 = |(x, y, xi d1 + z)|,
