@@ -22,6 +22,22 @@ struct GradientTable {
 };
 const GradientTable kGradients;
 
+// A fixed pseudo-random permutation of 0..255, stored twice so that sums of two entries need no wrap.
+struct PermutationTable {
+  std::uint8_t table[512];
+  PermutationTable() {
+    std::uint8_t p[256];
+    for (int i = 0; i < 256; ++i) p[i] = static_cast<std::uint8_t>(i);
+    std::uint32_t h = 0x1234567u;
+    for (int i = 255; i > 0; --i) {  // Fisher-Yates with a hash chain: the same table on every platform
+      h = hash32(h + 0x9e3779b9u);
+      std::swap(p[i], p[h % static_cast<std::uint32_t>(i + 1)]);
+    }
+    for (int i = 0; i < 512; ++i) table[i] = p[i & 255];
+  }
+};
+const PermutationTable kPermutation;
+
 float smoothstep(float edge0, float edge1, float x) {
   const float t = std::clamp((x - edge0) / (edge1 - edge0), 0.0f, 1.0f);
   return t * t * (3.0f - 2.0f * t);
@@ -188,14 +204,23 @@ float gradientNoise(float x, float y, std::uint32_t seed) {
   const int iy = static_cast<int>(fy0);
   const float fx = x - fx0;
   const float fy = y - fy0;
-  auto corner = [&](int cx, int cy, float dx, float dy) {
-    const std::uint32_t g = cellHash(seed, cx, cy) & 15u;
+  // Lattice hash by two permutation-table look-ups (period 256 cells, shifted by the seed): much
+  // cheaper than a multiply-based hash, and each octave is rotated and offset, so the period
+  // never shows.
+  const std::uint8_t* perm = kPermutation.table;
+  const unsigned seed_x = seed & 255u;
+  const unsigned seed_y = (seed >> 8) & 255u;
+  const unsigned px0 = perm[(static_cast<unsigned>(ix) + seed_x) & 255u];
+  const unsigned px1 = perm[(static_cast<unsigned>(ix) + 1u + seed_x) & 255u];
+  const unsigned jy = static_cast<unsigned>(iy) + seed_y;
+  auto corner = [&](unsigned px, unsigned cy, float dx, float dy) {
+    const unsigned g = perm[(px + cy) & 511u] & 15u;
     return kGradients.x[g] * dx + kGradients.y[g] * dy;
   };
-  const float n00 = corner(ix, iy, fx, fy);
-  const float n10 = corner(ix + 1, iy, fx - 1.0f, fy);
-  const float n01 = corner(ix, iy + 1, fx, fy - 1.0f);
-  const float n11 = corner(ix + 1, iy + 1, fx - 1.0f, fy - 1.0f);
+  const float n00 = corner(px0, jy & 255u, fx, fy);
+  const float n10 = corner(px1, jy & 255u, fx - 1.0f, fy);
+  const float n01 = corner(px0, (jy + 1u) & 255u, fx, fy - 1.0f);
+  const float n11 = corner(px1, (jy + 1u) & 255u, fx - 1.0f, fy - 1.0f);
   // Quintic fade: continuous second derivative, no creases at cell borders.
   const float sx = fx * fx * fx * (fx * (fx * 6.0f - 15.0f) + 10.0f);
   const float sy = fy * fy * fy * (fy * (fy * 6.0f - 15.0f) + 10.0f);

@@ -1,0 +1,143 @@
+// End-to-end checks of `voca synth`: runs the command and reads its output with the project's readers.
+
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "drivers/dataset/dataset.h"
+#include "tests/test_support.h"
+#include "voca/calib/calibration.h"
+#include "voca/image/png_io.h"
+#include "voca/synth/rigs.h"
+#include "voca/trajectory/trajectory.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int runVoca(const std::string& args) {
+  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " 2>/dev/null";
+  return std::system(command.c_str());
+}
+
+std::string readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST_CASE("voca synth writes a EuRoC folder with ground truth and calibration that the readers accept") {
+  voca::test::ScratchDir scratch("synth-e2e");
+  const fs::path out = scratch / "seq";
+  REQUIRE(runVoca("synth --out " + out.string() + " --seconds 0.5 --seed 3 --motion aggressive") == 0);
+
+  const voca::Dataset dataset = voca::openDataset(out);
+  CHECK(dataset.layout == voca::DatasetLayout::kEuroc);
+  REQUIRE(dataset.frames.size() == 10);  // 0.5 s at 20 Hz
+  CHECK(dataset.warnings.empty());
+  REQUIRE(dataset.ground_truth.has_value());
+  REQUIRE(dataset.calibration.has_value());
+
+  const voca::GrayImage left = voca::readPngGray(dataset.frames[0].left);
+  CHECK(left.width() == 752);
+  CHECK(left.height() == 480);
+
+  const voca::StereoRig rig = voca::loadCalibration(out / "calib.json");
+  const voca::StereoRig builtin = voca::synth::eurocRig();
+  REQUIRE(rig.cameras.size() == 2);
+  for (int c = 0; c < 2; ++c) {
+    CHECK(rig.cameras[c].camera.modelName() == "pinhole-radtan8");
+    CHECK(rig.cameras[c].width == 752);
+    // The JSON stores the values with full precision.
+    CHECK((rig.cameras[c].T_body_cam.matrix() - builtin.cameras[c].T_body_cam.matrix()).norm() < 1e-9);
+  }
+
+  const voca::Trajectory gt = voca::loadTrajectory(*dataset.ground_truth);
+  REQUIRE(gt.poses.size() == dataset.frames.size());
+  for (std::size_t i = 0; i < gt.poses.size(); ++i) CHECK(gt.poses[i].t_ns == dataset.frames[i].t_ns);
+  // Consecutive ground-truth poses 50 ms apart: the drone-like preset moves, but continuously.
+  for (std::size_t i = 1; i < gt.poses.size(); ++i) {
+    const double step = (gt.poses[i].T_world_body.translation() - gt.poses[i - 1].T_world_body.translation()).norm();
+    CHECK(step > 0.0);
+    CHECK(step < 0.25);  // 5 m/s at most
+  }
+
+  SUBCASE("the same seed gives the same bytes, another seed other noise") {
+    const fs::path again = scratch / "again";
+    const fs::path other = scratch / "other";
+    REQUIRE(runVoca("synth --out " + again.string() + " --seconds 0.5 --seed 3 --motion aggressive") == 0);
+    REQUIRE(runVoca("synth --out " + other.string() + " --seconds 0.5 --seed 4 --motion aggressive") == 0);
+    const fs::path gt_rel = fs::path("mav0") / "state_groundtruth_estimate0" / "data.csv";
+    CHECK(readBytes(out / gt_rel) == readBytes(again / gt_rel));
+    CHECK(readBytes(out / gt_rel) == readBytes(other / gt_rel));  // the seed only drives the noise
+    for (const voca::StereoFrameRef& frame : dataset.frames) {
+      const fs::path rel = fs::relative(frame.right, out);
+      CHECK(readBytes(frame.right) == readBytes(again / rel));
+      CHECK(readBytes(frame.right) != readBytes(other / rel));
+    }
+  }
+
+  SUBCASE("a trajectory file is followed, resampled and re-centred") {
+    // The ground truth just written, moved far away and slowed down to 10 Hz timestamps spacing.
+    voca::Trajectory shifted = gt;
+    for (voca::TimedPose& pose : shifted.poses) pose.T_world_body.translation() += Eigen::Vector3d(100.0, -40.0, 3.0);
+    const fs::path file = scratch / "shifted.txt";
+    voca::saveTrajectory(shifted, file, voca::TrajectoryFormat::kTum);
+    const fs::path followed = scratch / "followed";
+    REQUIRE(runVoca("synth --out " + followed.string() + " --trajectory " + file.string() + " --rate 40") == 0);
+    const voca::Trajectory result =
+        voca::loadTrajectory(followed / "mav0" / "state_groundtruth_estimate0" / "data.csv");
+    // 0.45 s of trajectory at 40 Hz: 19 frames, every one at a file time or between two.
+    REQUIRE(result.poses.size() == 19);
+    CHECK(result.poses.front().t_ns == shifted.poses.front().t_ns);
+    const Eigen::Vector3d offset =
+        result.poses.front().T_world_body.translation() - shifted.poses.front().T_world_body.translation();
+    for (std::size_t i = 0; i < result.poses.size(); i += 2) {
+      // Even frames fall on the file's own timestamps: same rotation, same translation up to the offset.
+      const voca::SE3d& expected = shifted.poses[i / 2].T_world_body;
+      CHECK((result.poses[i].T_world_body.translation() - expected.translation() - offset).norm() < 1e-6);
+      CHECK((result.poses[i].T_world_body.so3().inverse() * expected.so3()).log().norm() < 1e-6);
+    }
+    // Re-centred: the camera ends up in the room (the default room is centred on the origin).
+    CHECK(result.poses.front().T_world_body.translation().head<2>().norm() < 5.0);
+  }
+}
+
+TEST_CASE("voca synth renders the TUM-VI fisheye rig") {
+  voca::test::ScratchDir scratch("synth-e2e-tumvi");
+  const fs::path out = scratch / "seq";
+  REQUIRE(runVoca("synth --out " + out.string() + " --camera tumvi --motion fast-rotation --seconds 0.15") == 0);
+  const voca::Dataset dataset = voca::openDataset(out);
+  REQUIRE(dataset.frames.size() == 3);
+  const voca::GrayImage image = voca::readPngGray(dataset.frames[2].left);
+  CHECK(image.width() == 512);
+  CHECK(image.height() == 512);
+  const voca::StereoRig rig = voca::loadCalibration(*dataset.calibration);
+  CHECK(rig.cameras[0].camera.modelName() == "kb4");
+  // A textured scene everywhere: no large flat areas (the standard deviation of 16x16 blocks).
+  int flat_blocks = 0, blocks = 0;
+  for (int by = 0; by + 16 <= image.height(); by += 16) {
+    for (int bx = 0; bx + 16 <= image.width(); bx += 16) {
+      double sum = 0.0, sum2 = 0.0;
+      for (int y = by; y < by + 16; ++y) {
+        for (int x = bx; x < bx + 16; ++x) {
+          sum += image(x, y);
+          sum2 += static_cast<double>(image(x, y)) * image(x, y);
+        }
+      }
+      const double mean = sum / 256.0;
+      flat_blocks += (sum2 / 256.0 - mean * mean) < 9.0;  // below 3 gray levels: noise only
+      ++blocks;
+    }
+  }
+  CHECK(flat_blocks < blocks / 20);
+}
+
+TEST_CASE("voca synth rejects bad options with a clear error") {
+  voca::test::ScratchDir scratch("synth-e2e-bad");
+  CHECK(runVoca("synth --out " + (scratch / "a").string() + " --motion sideways") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "b").string() + " --camera /nonexistent/calib.json") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "c").string() + " --rate 0") == 1 << 8);
+}
