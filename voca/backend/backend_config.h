@@ -1,0 +1,55 @@
+#pragma once
+// Parameters of the sliding-window VO backend (the JSON "backend" section; defaults are the paper's
+// EuRoC values, Basalt's config.vio_* keys).
+
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+namespace voca {
+
+// Compile-time bound on the window (keyframes + the newest frame), so the reduced camera system is
+// a fixed-size matrix and never touches the heap.
+inline constexpr int kMaxWindowFrames = 10;
+
+struct BackendConfig {
+  // Window and keyframes.
+  int max_keyframes = 7;                 // vio_max_kfs (at most kMaxWindowFrames - 1)
+  int min_frames_after_kf = 1;           // vio_min_frames_after_kf
+  double new_kf_keypoints_thresh = 0.8;  // vio_new_kf_keypoints_thresh: keyframe when connected / tracked < this
+  double kf_marg_feature_ratio = 0.2;    // vio_kf_marg_feature_ratio: marginalise a keyframe whose landmarks are lost
+  // Residuals.
+  double obs_std_dev_px = 0.5;        // vio_obs_std_dev
+  double obs_huber_thresh_px = 1.0;   // vio_obs_huber_thresh
+  double outlier_threshold_px = 3.0;  // vio_outlier_threshold
+  int filter_iteration = 4;           // vio_filter_iteration: outlier filter after this many LM iterations
+  // Triangulation.
+  double min_triangulation_dist_m = 0.05;  // vio_min_triangulation_dist
+  double min_inverse_distance = 1e-3;      // 1/m; farther points carry no translation information
+  double max_inverse_distance = 3.0;       // 1/m; Basalt's plausibility bound (closer than 0.33 m is rejected)
+  // Optimisation.
+  int max_iterations = 7;           // vio_max_iterations
+  bool use_lm = true;               // vio_use_lm (false: Gauss-Newton at lm_lambda_initial)
+  double lm_lambda_initial = 1e-4;  // vio_lm_lambda_initial
+  double lm_lambda_min = 1e-5;      // vio_lm_lambda_min
+  double lm_lambda_max = 1e2;       // vio_lm_lambda_max
+  double init_pose_weight = 1e8;    // vio_init_pose_weight: prior fixing the first pose
+  int pose_only_iterations = 6;     // robust Gauss-Newton steps on the new frame before the window
+  // Capacities (fixed memory).
+  int max_landmarks = 2000;
+  int max_observations_per_camera = 1000;
+  // Failure detection and reset.
+  int min_inliers = 12;                  // observations of the new frame that must survive
+  double max_rms_reprojection_px = 3.0;  // rms error of the new frame's inliers after optimisation
+  double max_translation_per_frame_m = 3.0;
+  double max_rotation_per_frame_deg = 45.0;
+};
+
+// Checks every value against its allowed range; throws InputError naming `context`.<key>, the
+// allowed range and the value found.
+void validateBackendConfig(const BackendConfig& config, const std::string& context = "backend");
+
+// The "backend" section: every key optional (default above), unknown keys and out-of-range values
+// are InputError naming the key, e.g. "file.json: backend.max_keyframes: expected 2..9, got 12".
+BackendConfig parseBackendConfig(const nlohmann::json& section, const std::string& context);
+
+}  // namespace voca

@@ -1,0 +1,78 @@
+#pragma once
+// The backend's measurement model: a landmark hosted in a keyframe's left camera as a stereographic
+// bearing and an inverse distance, reprojected into any camera of any frame, with analytic Jacobians.
+
+#include <Eigen/Core>
+
+#include "voca/camera/generic_camera.h"
+#include "voca/geometry/se3.h"
+
+namespace voca {
+
+// Unit bearing from 2-D stereographic coordinates s (the projection from the south pole onto the
+// plane z = 0): b = (2 s, 1 - |s|^2) / (1 + |s|^2). Regular everywhere except the backward direction.
+inline Eigen::Vector3d stereographicUnproject(const Eigen::Vector2d& s,
+                                              Eigen::Matrix<double, 3, 2>* d_b_d_s = nullptr) {
+  const double n2 = s.squaredNorm();
+  const double inv = 1.0 / (1.0 + n2);
+  const Eigen::Vector3d b(2.0 * s.x() * inv, 2.0 * s.y() * inv, (1.0 - n2) * inv);
+  if (d_b_d_s != nullptr) {
+    const double inv2 = inv * inv;
+    (*d_b_d_s)(0, 0) = 2.0 * inv - 4.0 * s.x() * s.x() * inv2;
+    (*d_b_d_s)(0, 1) = -4.0 * s.x() * s.y() * inv2;
+    (*d_b_d_s)(1, 0) = (*d_b_d_s)(0, 1);
+    (*d_b_d_s)(1, 1) = 2.0 * inv - 4.0 * s.y() * s.y() * inv2;
+    (*d_b_d_s)(2, 0) = -4.0 * s.x() * inv2;
+    (*d_b_d_s)(2, 1) = -4.0 * s.y() * inv2;
+  }
+  return b;
+}
+
+// Inverse of stereographicUnproject for any non-zero direction (normalised first).
+inline Eigen::Vector2d stereographicProject(const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d b = direction.normalized();
+  return b.head<2>() / (1.0 + b.z());
+}
+
+// Jacobians of the projected pixel. Pose increments xi = (v, w) act as t <- t + v, R <- exp(w) R
+// (world-frame rotation), landmark increments as (s, inverse distance) <- + (ds, drho).
+struct ReprojectionJacobians {
+  Eigen::Matrix<double, 2, 6> d_host;
+  Eigen::Matrix<double, 2, 6> d_target;
+  Eigen::Matrix<double, 2, 3> d_landmark;
+};
+
+// Projects the landmark (bearing s and inverse distance rho in the host frame's cam0) into camera
+// `camera` of the target frame, whose pose in that frame's cam0 is T_cam0_cam. Poses are
+// T_world_cam0 of the host and target frames. Works in homogeneous coordinates scaled by rho, so a
+// point at infinity (rho = 0) is fine. Returns false when the camera model cannot project it.
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const SE3d& T_world_host, const SE3d& T_world_target,
+                              const SE3d& T_cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
+                              ReprojectionJacobians* jacobians = nullptr) {
+  Eigen::Matrix<double, 3, 2> d_b_d_s;
+  const Eigen::Vector3d b = stereographicUnproject(s, jacobians != nullptr ? &d_b_d_s : nullptr);
+  const Eigen::Matrix3d R_w_h = T_world_host.rotationMatrix();
+  const Eigen::Matrix3d R_t_w = T_world_target.rotationMatrix().transpose();
+  const Eigen::Matrix3d R_cam_cam0 = T_cam0_cam.rotationMatrix().transpose();
+  const Eigen::Vector3d dt_w = T_world_host.translation() - T_world_target.translation();
+  const Eigen::Vector3d Rb_w = R_w_h * b;
+  // v: the point relative to the target origin, in world axes, scaled by rho.
+  const Eigen::Vector3d v_w = Rb_w + dt_w * rho;
+  const Eigen::Vector3d p_cam = R_cam_cam0 * (R_t_w * v_w - T_cam0_cam.translation() * rho);
+  Eigen::Matrix<double, 2, 3> d_uv_d_p;
+  if (!camera.project(p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
+  if (jacobians != nullptr) {
+    const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
+    const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_cam0 * R_t_w;
+    jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
+    jacobians->d_host.rightCols<3>() = -d_uv_d_v * SO3d::hat(Rb_w);
+    jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
+    // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
+    jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
+    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * d_b_d_s;
+    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * T_cam0_cam.translation();
+  }
+  return true;
+}
+
+}  // namespace voca
