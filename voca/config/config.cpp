@@ -110,9 +110,7 @@ VocaConfig parseConfig(const json& root, const std::string& context) {
     if (key == "frontend") {
       config.frontend = parseFrontendConfig(value, context + ": frontend");
     } else if (key == "backend") {
-      // BACKEND SECTION: helper "backend" replaces this check with
-      // config.backend = parseBackendConfig(value, context + ": backend");
-      requireObject(value, context + ": backend");
+      config.backend = parseBackendConfig(value, context + ": backend");
     } else {
       throw InputError(fmt::format("{}: unknown top-level key \"{}\" (known: frontend, backend)", context, key));
     }

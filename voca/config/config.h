@@ -6,6 +6,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 
+#include "voca/backend/backend_config.h"
 #include "voca/frontend/frontend_config.h"
 
 namespace voca {
@@ -14,7 +15,7 @@ namespace voca {
 // paper's EuRoC values).
 struct VocaConfig {
   FrontendConfig frontend;
-  // BACKEND SECTION: helper "backend" adds its config struct here (see parseConfig()).
+  BackendConfig backend;
 };
 
 // Reads and validates a config file. Throws InputError naming the file and the key, e.g.
