@@ -136,6 +136,14 @@ class PinholeCamera {
   Params params_;
 };
 
+// GCC 12 reports -Wmaybe-uninitialized on the implicit copy of these models when they sit in a
+// std::variant holding another alternative (it copies the union's bytes). Every member has an
+// initialiser, so the report is a false positive; it is silenced for these class bodies only.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
 // Pinhole with OpenCV's rational radial (k1..k6) and tangential (p1, p2) distortion, Basalt's
 // "pinhole-radtan8". Kalibr's "radtan" is the case k3 = k4 = k5 = k6 = 0.
 // Parameters fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6.
@@ -480,6 +488,10 @@ class KannalaBrandt4Camera {
   Scalar max_theta_ = Scalar(0);
   Scalar max_distorted_ = Scalar(0);
 };
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 // Double sphere model. d1 = |p|, d2 = |(x, y, xi d1 + z)|,
 // u = fx x / (alpha d2 + (1 - alpha)(xi d1 + z)) + cx. Parameters fx fy cx cy xi alpha.
