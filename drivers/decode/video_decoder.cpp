@@ -306,7 +306,8 @@ void VideoDecoder::sendEnd() {
 
 void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
   const int width = pixels.width, height = pixels.height;
-  out.type = pictureType(pixels.pict_type);
+  // Hardware wrappers (V4L2 M2M) may not report the picture type; the software parse always does.
+  out.type = pictureType(&vectors != &pixels ? vectors.pict_type : pixels.pict_type);
   out.frame_index = frames_out;
   const std::int64_t pts = pixels.best_effort_timestamp != AV_NOPTS_VALUE ? pixels.best_effort_timestamp : pixels.pts;
   out.pts = pts == AV_NOPTS_VALUE ? kNoPts : pts;

@@ -51,7 +51,7 @@ void VideoReader::Impl::checkFrame(DecodedFrame& frame) {
   if (!t_ns.empty()) {
     if (static_cast<std::size_t>(frames) >= t_ns.size()) {
       throw InputError(path.string() + ": has more frames than the " + std::to_string(t_ns.size()) +
-                       " timestamps of its data.csv (frame " + std::to_string(frames) +
+                       " timestamps given (data.csv rows; frame " + std::to_string(frames) +
                        " has none); frames must follow data.csv rows one to one");
     }
     frame.t_ns = t_ns[static_cast<std::size_t>(frames)];
@@ -74,8 +74,10 @@ VideoReader::VideoReader(const std::filesystem::path& video, std::vector<std::in
     : impl_(std::make_unique<Impl>(video, std::move(t_ns), options, probe)) {
   const StreamInfo& info = impl_->demuxer.stream();
   if (!impl_->t_ns.empty() && info.num_frames > 0 && static_cast<std::size_t>(info.num_frames) != impl_->t_ns.size()) {
-    throw InputError(video.string() + ": has " + std::to_string(info.num_frames) + " frames but its data.csv lists " +
-                     std::to_string(impl_->t_ns.size()) + " timestamps; frames must follow data.csv rows one to one");
+    throw InputError(
+        video.string() + ": has " + std::to_string(info.num_frames) + " frames but " +
+        std::to_string(impl_->t_ns.size()) +
+        " timestamps were given (the dataset's data.csv rows); frames must follow data.csv rows one to one");
   }
 }
 

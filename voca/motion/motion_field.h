@@ -91,8 +91,8 @@ class MotionField {
   // True when the vectors were carried over from an earlier P-frame (I-frame bridging); the
   // picture type stays that of this frame.
   bool bridged() const { return bridged_; }
-  // Index (within the stream) of the frame the vectors were decoded from; equals this frame's
-  // source_frame when not bridged. Set by the decoder.
+  // Index of the frame the vectors were decoded from: this frame's own index unless bridged. Set by
+  // the decoder.
   std::int64_t sourceFrame() const { return source_frame_; }
   void setSourceFrame(std::int64_t frame) { source_frame_ = frame; }
 
