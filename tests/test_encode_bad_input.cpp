@@ -113,6 +113,13 @@ TEST_CASE("dataset problems are InputErrors naming the folder") {
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out", cameras); }), "camera 2"));
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "raw", options); }), "input dataset"));
 
+  // Settings the codec cannot take fail before anything is written.
+  DatasetEncodeOptions rate = options;
+  rate.settings.codec = "mpeg2video";
+  rate.settings.fps_num = 23;
+  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-rate", rate); }), "23/1"));
+  CHECK(!std::filesystem::exists(dir / "out-rate"));
+
   // The output folder cannot be created where a file is.
   std::ofstream(dir / "file-not-folder") << "x";
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "file-not-folder", options); }),

@@ -162,6 +162,11 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
   if (options.use_dataset_fps) datasetFrameRate(dataset, settings.fps_num, settings.fps_den);
   report.fps_num = settings.fps_num;
   report.fps_den = settings.fps_den;
+  {
+    // Codec, rate and x264 options are checked on a small frame before any folder is created.
+    VideoEncoder probe;
+    probe.open(settings, 64, 64);
+  }
 
   // Load the calibration before the long encoding so that a bad file fails early.
   std::optional<StereoRig> rig;

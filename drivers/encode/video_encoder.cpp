@@ -39,7 +39,10 @@ std::string avError(int code) {
 }
 
 struct CodecContextDeleter {
-  void operator()(AVCodecContext* ctx) const { avcodec_free_context(&ctx); }
+  void operator()(AVCodecContext* ctx) const {
+    av_freep(&ctx->stats_in);  // the caller's to free (set for mpegvideo's second pass)
+    avcodec_free_context(&ctx);
+  }
 };
 struct FrameDeleter {
   void operator()(AVFrame* frame) const { av_frame_free(&frame); }
@@ -218,7 +221,6 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   if (pass == EncoderPass::kSecond) ctx->flags |= AV_CODEC_FLAG_PASS2;
 
   AVDictionary* options = nullptr;
-  std::string stats_in;
   if (settings.codec == "libx264") {
     // libavcodec's libx264 wrapper maps PASS1/PASS2 to x264's stat write/read and hands the file
     // name to x264 as its "stats" option (x264 also writes <stats>.mbtree beside it).
@@ -229,9 +231,8 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   } else {
     ctx->gop_size = settings.gop_size;
     if (pass == EncoderPass::kSecond) {
-      // mpegvideo's two-pass rate control reads pass 1's lines from stats_in (libavcodec frees it).
-      stats_in = readWholeFile(stats_file);
-      ctx->stats_in = av_strdup(stats_in.c_str());
+      // mpegvideo's two-pass rate control reads pass 1's lines from stats_in.
+      ctx->stats_in = av_strdup(readWholeFile(stats_file).c_str());
     }
   }
   const int ret = avcodec_open2(ctx.get(), codec, &options);
@@ -339,6 +340,8 @@ class Mp4Writer {
       throw RuntimeFailure(fmt::format("cannot create an mp4 muxer: {}", avError(r)));
     }
     if (const int r = avio_open(&format_->pb, path.c_str(), AVIO_FLAG_WRITE); r < 0) {
+      avformat_free_context(format_);  // the destructor does not run for a throwing constructor
+      format_ = nullptr;
       throw InputError(fmt::format("cannot write {}: {}", path.string(), avError(r)));
     }
   }
