@@ -131,7 +131,7 @@ TEST_CASE("a rendered marker disc lands where the camera model projects its cent
     REQUIRE(sum > 0.0);
     const Eigen::Vector2d centroid(sx / sum, sy / sum);
     INFO("expected " << expected.transpose() << " centroid " << centroid.transpose());
-    // Edge pixels integrate 16 samples (coverage steps of 1/16) and values are rounded to 8 bits:
+    // Edge pixels integrate 9 samples (coverage steps of 1/9) and values are rounded to 8 bits:
     // over the ~25 edge pixels of the disc this moves the centroid by about 0.01 px.
     CHECK((centroid - expected).norm() < 0.05);
   }

@@ -36,7 +36,7 @@ struct SynthOptions {
   std::uint64_t seed = 1;
   std::uint32_t scene_seed = 7;
   double noise_sigma = 2.0;
-  int supersample = 4;
+  int supersample = 3;
   int threads = 2;
 };
 

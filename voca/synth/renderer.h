@@ -49,7 +49,7 @@ struct RenderSettings {
   std::uint64_t noise_seed = 0;
   std::uint64_t frame_index = 0;  // with camera_index, selects the noise field of this image
   int camera_index = 0;
-  int supersample = 4;  // n x n stratified samples in pixels crossed by an edge
+  int supersample = 3;  // n x n stratified samples in pixels crossed by an edge
 };
 
 // Renders rows [y_begin, y_end) of a camera at pose T_world_cam into out (same size as the ray

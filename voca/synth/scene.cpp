@@ -260,14 +260,15 @@ Scene Scene::generate(const SceneConfig& config, std::span<const Eigen::Vector3d
     p.seed = rng.next();
     p.base = rng.uniform(0.42f, 0.62f);
     p.noise_amp = rng.uniform(0.16f, 0.26f);
-    p.noise_max_wavelength_m = rng.uniform(1.0f, 2.5f);
+    p.noise_max_wavelength_m = rng.uniform(0.6f, 1.0f);
     p.noise_min_wavelength_m = 0.0015f;
     p.noise_persistence = rng.uniform(0.7f, 0.82f);
     p.rect_cell_m = rng.uniform(0.6f, 1.1f);
     p.rect_density = rng.uniform(0.45f, 0.7f);
     p.rect_small_cell_m = rng.uniform(0.12f, 0.25f);
+    p.rect_small_density = rng.uniform(0.12f, 0.3f);
     p.blob_cell_m = rng.uniform(0.2f, 0.45f);
-    p.blob_density = rng.uniform(0.3f, 0.6f);
+    p.blob_density = rng.uniform(0.15f, 0.35f);
     p.text_block_m = rng.uniform(0.004f, 0.008f);
     p.text_line_cell_m = rng.uniform(0.5f, 0.8f);
     p.text_density = rng.uniform(0.25f, 0.45f);
@@ -278,12 +279,13 @@ Scene Scene::generate(const SceneConfig& config, std::span<const Eigen::Vector3d
     floor.seed = rng.next();
     floor.base = 0.36f;
     floor.noise_amp = 0.3f;
-    floor.noise_max_wavelength_m = 2.0f;
+    floor.noise_max_wavelength_m = 1.0f;
     floor.noise_min_wavelength_m = 0.0015f;
     floor.noise_persistence = 0.85f;
     floor.rect_cell_m = 0.5f;
     floor.rect_density = 0.5f;
     floor.rect_small_cell_m = 0.09f;
+    floor.rect_small_density = 0.25f;
     floor.blob_cell_m = 0.3f;
     floor.blob_density = 0.5f;
     scene.setWallMaterial(4, scene.addMaterial(floor));
@@ -291,13 +293,14 @@ Scene Scene::generate(const SceneConfig& config, std::span<const Eigen::Vector3d
     ceiling.seed = rng.next();
     ceiling.base = 0.62f;
     ceiling.noise_amp = 0.18f;
-    ceiling.noise_max_wavelength_m = 1.5f;
+    ceiling.noise_max_wavelength_m = 0.8f;
     ceiling.noise_min_wavelength_m = 0.002f;
     ceiling.rect_cell_m = 0.6f;
     ceiling.rect_density = 0.7f;
     ceiling.rect_small_cell_m = 0.2f;
+    ceiling.rect_small_density = 0.1f;
     ceiling.blob_cell_m = 0.4f;
-    ceiling.blob_density = 0.4f;
+    ceiling.blob_density = 0.15f;
     scene.setWallMaterial(5, scene.addMaterial(ceiling));
   }
 
@@ -306,13 +309,14 @@ Scene Scene::generate(const SceneConfig& config, std::span<const Eigen::Vector3d
     p.seed = rng.next();
     p.base = rng.uniform(0.25f, 0.75f);
     p.noise_amp = rng.uniform(0.15f, 0.28f);
-    p.noise_max_wavelength_m = rng.uniform(0.4f, 1.0f);
+    p.noise_max_wavelength_m = rng.uniform(0.3f, 0.6f);
     p.noise_min_wavelength_m = 0.0015f;
     p.noise_persistence = rng.uniform(0.7f, 0.85f);
     p.rect_small_cell_m = rng.uniform(0.08f, 0.2f);
     p.rect_density = rng.uniform(0.4f, 0.7f);
+    p.rect_small_density = rng.uniform(0.2f, 0.45f);
     p.blob_cell_m = rng.uniform(0.06f, 0.15f);
-    p.blob_density = rng.uniform(0.3f, 0.6f);
+    p.blob_density = rng.uniform(0.2f, 0.45f);
     if (text) {
       p.text_block_m = rng.uniform(0.003f, 0.006f);
       p.text_line_cell_m = rng.uniform(0.2f, 0.35f);

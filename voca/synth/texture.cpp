@@ -281,7 +281,8 @@ float ProceduralTexture::sample(float u, float v, float footprint_m) const {
     albedo = blobLayer(albedo, u, v, footprint, p.blob_cell_m, p.blob_density, p.seed ^ 0xb10b5u);
   }
   if (p.rect_small_cell_m > 0.0f) {
-    albedo = rectangleLayer(albedo, p.base, u, v, footprint, p.rect_small_cell_m, p.rect_density, p.seed ^ 0x7a11e5u);
+    albedo =
+        rectangleLayer(albedo, p.base, u, v, footprint, p.rect_small_cell_m, p.rect_small_density, p.seed ^ 0x7a11e5u);
   }
   if (p.text_block_m > 0.0f) {
     albedo = textLayer(albedo, u, v, footprint, p.text_block_m, p.text_line_cell_m, p.text_density, p.seed ^ 0x7e47u);

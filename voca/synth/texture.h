@@ -33,6 +33,7 @@ struct TextureParams {
   float rect_cell_m = 0.0f;  // 0 disables the layer
   float rect_density = 0.6f;
   float rect_small_cell_m = 0.0f;  // a second, finer rectangle layer (tiles, stickers)
+  float rect_small_density = 0.3f;
   // Discs.
   float blob_cell_m = 0.0f;
   float blob_density = 0.5f;
