@@ -252,11 +252,13 @@ const bool registered = voca::cli::registerCommand(
        app.add_option("--camera", options->camera,
                       "euroc (pinhole-radtan 752x480), tumvi (kb4 512x512) or a calibration file/folder")
            ->capture_default_str();
-       app.add_option("--trajectory", options->trajectory,
-                      "Follow this trajectory (TUM, EuRoC csv) instead of a preset; resampled to --rate and "
-                      "re-centred in the room (its z axis is taken as up)");
+       CLI::Option* trajectory =
+           app.add_option("--trajectory", options->trajectory,
+                          "Follow this trajectory (TUM, EuRoC csv) instead of a preset; resampled to --rate and "
+                          "re-centred in the room (its z axis is taken as up)");
        app.add_option("--motion", options->motion, "Motion preset: gentle, fast-rotation or aggressive")
-           ->capture_default_str();
+           ->capture_default_str()
+           ->excludes(trajectory);
        app.add_option("--seconds", options->seconds, "Duration (default: 20 s for presets, the whole trajectory file)");
        app.add_option("--rate", options->rate_hz, "Frame rate, Hz")->capture_default_str();
        app.add_option("--seed", options->seed, "Seed of the sensor noise")->capture_default_str();
