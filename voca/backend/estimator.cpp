@@ -677,14 +677,25 @@ int VoEstimator::chooseKeyframeToMarginalize(int newest) const {
   return best;
 }
 
-void VoEstimator::marginalize(int frame) {
+void VoEstimator::prepareMarginalization(int frame) {
   Frame& fm = frames_[static_cast<std::size_t>(frame)];
-  // Landmarks hosted here move to another keyframe that sees them in its left camera (kept alive,
-  // as Basalt does not); the others are marginalised with the frame.
+  // Landmarks hosted here that the newest frame still tracks move to another keyframe that sees
+  // them in its left camera (kept alive, where Basalt loses them); the others are marginalised with
+  // the frame, so their information on the window stays in the prior.
+  int newest = -1;
+  for (int g = 0; g < kMaxWindowFrames; ++g) {
+    const Frame& fg = frames_[static_cast<std::size_t>(g)];
+    if (fg.active && (newest < 0 || fg.sequence > frames_[static_cast<std::size_t>(newest)].sequence)) newest = g;
+  }
+  const std::uint32_t newest_bits = 3u << maskBit(newest, 0);
   scratch_landmarks_.clear();
   for (int i = 0; i < config_.max_landmarks; ++i) {
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive || lm.host != frame) continue;
+    if (newest == frame || (lm.mask & newest_bits) == 0) {
+      scratch_landmarks_.push_back(i);
+      continue;
+    }
     int new_host = -1;
     for (int g = 0; g < kMaxWindowFrames; ++g) {
       const Frame& fg = frames_[static_cast<std::size_t>(g)];
@@ -709,7 +720,15 @@ void VoEstimator::marginalize(int frame) {
     }
     if (!moved) scratch_landmarks_.push_back(i);
   }
+  // Views in this frame of the landmarks that stay cannot go into a pose-only prior: dropped.
+  const std::uint32_t bits = 3u << maskBit(frame, 0);
+  for (Landmark& lm : landmarks_) {
+    if (lm.alive && lm.host != frame) lm.mask &= ~bits;
+  }
+}
 
+void VoEstimator::marginalize(int frame) {
+  prepareMarginalization(frame);
   // Information on the window from the prior and the marginalised landmarks, landmarks eliminated.
   linearize(H_, b_, &scratch_landmarks_);
   for (const int i : scratch_landmarks_) {
@@ -940,14 +959,27 @@ double VoEstimator::optimizeWindow(int iterations) {
   return cost();
 }
 
-bool VoEstimator::marginalizeOldestKeyframe() {
+int VoEstimator::oldestKeyframe() const {
   int oldest = -1;
   for (int i = 0; i < kMaxWindowFrames; ++i) {
     const Frame& f = frames_[static_cast<std::size_t>(i)];
-    if (f.active && f.keyframe && (oldest < 0 || f.sequence < frames_[static_cast<std::size_t>(oldest)].sequence))
+    if (f.active && f.keyframe && (oldest < 0 || f.sequence < frames_[static_cast<std::size_t>(oldest)].sequence)) {
       oldest = i;
+    }
   }
-  if (oldest < 0 || numKeyframes() < 2) return false;
+  return numKeyframes() < 2 ? -1 : oldest;
+}
+
+bool VoEstimator::dropViewsOfOldestKeyframe() {
+  const int oldest = oldestKeyframe();
+  if (oldest < 0) return false;
+  prepareMarginalization(oldest);
+  return true;
+}
+
+bool VoEstimator::marginalizeOldestKeyframe() {
+  const int oldest = oldestKeyframe();
+  if (oldest < 0) return false;
   marginalize(oldest);
   return true;
 }

@@ -87,6 +87,10 @@ class VoEstimator {
   // final cost; marginalizeOldestKeyframe() moves the oldest keyframe into the prior.
   double optimizeWindow(int iterations);
   bool marginalizeOldestKeyframe();
+  // The reference for marginalisation: makes only the changes to observations that marginalising
+  // the oldest keyframe makes (re-hosting, dropping its views of landmarks that stay) and keeps the
+  // frame in the window, so optimising afterwards gives what an exact marginalisation must reproduce.
+  bool dropViewsOfOldestKeyframe();
 
  private:
   static constexpr int kDim = 6 * kMaxWindowFrames;
@@ -147,7 +151,9 @@ class VoEstimator {
   int optimize(int max_iterations, bool filter);
   void filterOutliers();
   int chooseKeyframeToMarginalize(int newest) const;
+  void prepareMarginalization(int frame);
   void marginalize(int frame);
+  int oldestKeyframe() const;
   void removeLandmark(int index);
   void removeFrame(int frame);
   void frameStats(int frame, PoseEstimate& out) const;
