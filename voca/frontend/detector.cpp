@@ -80,6 +80,7 @@ GridDetector::GridDetector(int max_width, int max_height, int grid_size_px) : gr
   const int cells_x = (max_width + grid_size_px - 1) / grid_size_px;
   const int cells_y = (max_height + grid_size_px - 1) / grid_size_px;
   occupied_.assign(static_cast<std::size_t>(cells_x) * static_cast<std::size_t>(cells_y), 0);
+  candidates_.reserve(static_cast<std::size_t>(grid_size_px) * static_cast<std::size_t>(grid_size_px));
 }
 
 int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existing, const DetectorParams& params,
@@ -106,25 +107,32 @@ int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existi
       const int x0 = std::max(cx * g, border), x1 = std::min((cx + 1) * g, image.width - border);
       const int y0 = std::max(cy * g, border), y1 = std::min((cy + 1) * g, image.height - border);
       if (x0 >= x1 || y0 >= y1) continue;
+      // A corner at threshold t is one at every lower threshold too, so one pass at the lowest
+      // threshold finds every candidate; the halving sequence then only revisits those.
+      candidates_.clear();
+      for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x) {
+          if (radius2 > 0.f) {
+            const float dx = static_cast<float>(x) - params.safe_center.x();
+            const float dy = static_cast<float>(y) - params.safe_center.y();
+            if (dx * dx + dy * dy > radius2) continue;
+          }
+          if (cornerResponse(image, x, y, params.min_threshold) > 0) candidates_.emplace_back(x, y);
+        }
+      }
+      if (candidates_.empty()) continue;
       for (int threshold = params.max_threshold; threshold >= params.min_threshold; threshold /= 2) {
-        int best = 0, best_x = 0, best_y = 0;
-        for (int y = y0; y < y1; ++y) {
-          for (int x = x0; x < x1; ++x) {
-            if (radius2 > 0.f) {
-              const float dx = static_cast<float>(x) - params.safe_center.x();
-              const float dy = static_cast<float>(y) - params.safe_center.y();
-              if (dx * dx + dy * dy > radius2) continue;
-            }
-            const int response = cornerResponse(image, x, y, threshold);
-            if (response > best) {
-              best = response;
-              best_x = x;
-              best_y = y;
-            }
+        int best = 0;
+        Eigen::Vector2i best_px(0, 0);
+        for (const Eigen::Vector2i& c : candidates_) {
+          const int response = cornerResponse(image, c.x(), c.y(), threshold);
+          if (response > best) {
+            best = response;
+            best_px = c;
           }
         }
         if (best > 0) {
-          out.emplace_back(static_cast<float>(best_x), static_cast<float>(best_y));
+          out.emplace_back(static_cast<float>(best_px.x()), static_cast<float>(best_px.y()));
           ++added;
           break;
         }

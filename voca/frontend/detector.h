@@ -43,6 +43,7 @@ class GridDetector {
  private:
   int grid_size_px_ = 0;
   std::vector<std::uint8_t> occupied_;
+  std::vector<Eigen::Vector2i> candidates_;  // corners of one cell at the lowest threshold
 };
 
 }  // namespace voca

@@ -57,7 +57,13 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     for (ImagePyramid& pyramid : cam.pyramids) pyramid = ImagePyramid(max_width, max_height, num_levels_);
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
     cam.traces.reserve(static_cast<std::size_t>(max_points_));
+    // Live points plus two scratch slots (the plain and the prior backward track of one point).
+    cam.num_levels = num_levels_;
+    cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
+    cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
+    cam.resetSlots();
     cam.last_p_frame = MotionField(max_width, max_height);
   }
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
@@ -82,25 +88,37 @@ void KltFrontend::setAverageDepth(double depth_m) {
   if (std::isfinite(depth_m) && depth_m > 0.0) average_depth_m_ = depth_m;
 }
 
+void KltFrontend::CameraState::resetSlots() {
+  free_slots.clear();
+  const int count = static_cast<int>(pool.size()) / num_levels;
+  for (int i = count - 1; i >= 0; --i) free_slots.push_back(i);
+  slots.clear();
+}
+
 void KltFrontend::reset() {
   for (CameraState& cam : cameras_) {
     cam.ids.clear();
     cam.points.clear();
+    cam.resetSlots();
     cam.traces.clear();
     cam.have_last_p_frame = false;
   }
   have_previous_ = false;
 }
 
-bool KltFrontend::trackChecked(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& result) const {
-  SE2f forward(0.f, p + flow_guess);
-  if (trackPatch(from, to, p, *pattern_, align_, num_levels_, forward) != AlignStatus::kConverged) return false;
-  const Eigen::Vector2f tracked = forward.translation();
+bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
+                               const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess,
+                               std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
+  SE2f T_forward(0.f, p + flow_guess);
+  if (trackPatch(forward, to, *pattern_, align_, T_forward) != AlignStatus::kConverged) return false;
+  const Eigen::Vector2f tracked = T_forward.translation();
   // The backward track starts from the negated guess, so a correct prior lands it near p again.
-  SE2f backward(0.f, tracked - flow_guess);
-  if (trackPatch(to, from, tracked, *pattern_, align_, num_levels_, backward) != AlignStatus::kConverged) return false;
-  if ((backward.translation() - p).squaredNorm() > static_cast<float>(config_.max_recovered_dist2_px2)) return false;
+  SE2f T_backward(0.f, tracked - flow_guess);
+  buildPyramidPatch(to, tracked, *pattern_, backward);
+  if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
+  if ((T_backward.translation() - p).squaredNorm() > static_cast<float>(config_.max_recovered_dist2_px2)) {
+    return false;
+  }
   result = tracked;
   return true;
 }
@@ -133,6 +151,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   const float tolerance = static_cast<float>(config_.consensus_tolerance_px2);
   cam.next_ids.clear();
   cam.next_points.clear();
+  cam.next_slots.clear();
   cam.traces.clear();
   ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
@@ -164,17 +183,23 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
         run_prior = has_vector;
         break;
     }
+    const int forward_slot = cam.slots[i];
+    const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
+    const auto attempt = [&](const Eigen::Vector2f& guess, int backward_slot, Eigen::Vector2f& tracked) {
+      return trackChecked(cam.slot(forward_slot), from, to, p, guess, cam.slot(backward_slot), tracked);
+    };
     if (mode == PriorMode::kMvThenOf && run_prior) {
-      prior_ok = trackChecked(from, to, p, mv, prior_px);
+      prior_ok = attempt(mv, prior_slot, prior_px);
       run_plain = !prior_ok;
     }
-    if (run_plain) plain_ok = trackChecked(from, to, p, zero, plain_px);
+    if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
     if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
-    if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = trackChecked(from, to, p, mv, prior_px);
+    if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
 
     bool keep = false;
+    bool keep_prior = false;
     Eigen::Vector2f result = zero;
     if (plain_ok && prior_ok) {
       // Only kMvParallelOf gets here: two answers that disagree mean one of them is a false match.
@@ -189,9 +214,14 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       result = plain_px;
     } else if (prior_ok) {
       keep = true;
+      keep_prior = true;
       result = prior_px;
       ++ts.rescued;
     }
+    // The kept result's backward templates become the point's templates; everything else is freed.
+    cam.release(forward_slot);
+    cam.release(keep && keep_prior ? plain_slot : prior_slot);
+    if (!keep) cam.release(plain_slot);
 
     PointTrace trace;
     trace.track_id = cam.ids[i];
@@ -208,6 +238,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     ++ts.kept;
     cam.next_ids.push_back(cam.ids[i]);
     cam.next_points.push_back(result);
+    cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
     if (has_vector) {
       stats.guess_dist_plain_px.push_back((result - p).norm());
       stats.guess_dist_prior_px.push_back((result - p - mv).norm());
@@ -215,6 +246,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   }
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
+  std::swap(cam.slots, cam.next_slots);
 }
 
 void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stats) {
@@ -229,8 +261,11 @@ void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stat
   const int right_room = max_points_ - static_cast<int>(right.points.size());
   for (const Eigen::Vector2f& p : new_points_) {
     const std::uint64_t id = next_track_id_++;
+    const int left_slot = left.acquire();
+    buildPyramidPatch(left.cur(), p, *pattern_, left.slot(left_slot));
     left.ids.push_back(id);
     left.points.push_back(p);
+    left.slots.push_back(left_slot);
     if (stats.stereo_matched >= right_room) continue;
     Eigen::Vector2f guess = p;
     Eigen::Vector3d bearing;
@@ -240,10 +275,14 @@ void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stat
       guess = uv.cast<float>();
     }
     Eigen::Vector2f matched;
-    if (trackChecked(left.cur(), right.cur(), p, guess - p, matched)) {
+    const int right_slot = right.acquire();
+    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, right.slot(right_slot), matched)) {
       right.ids.push_back(id);
       right.points.push_back(matched);
+      right.slots.push_back(right_slot);
       ++stats.stereo_matched;
+    } else {
+      right.release(right_slot);
     }
   }
 }
@@ -269,11 +308,15 @@ void KltFrontend::filterEpipolar(FrontendStats& stats) {
     if (keep) {
       right.ids[out] = id;
       right.points[out] = right.points[r];
+      right.slots[out] = right.slots[r];
       ++out;
+    } else {
+      right.release(right.slots[r]);
     }
   }
   right.ids.resize(out);
   right.points.resize(out);
+  right.slots.resize(out);
 }
 
 void KltFrontend::track(const FrontendInput& input, TrackedStereoFrame& out, FrontendStats& stats) {

@@ -21,8 +21,8 @@ namespace voca {
 
 // Upper bounds the frontend allocates for once.
 struct FrontendCapacities {
-  int max_points = 1000;  // per camera
-  int max_width = 0;      // 0 = the calibration's image size
+  int max_points = 500;  // per camera (template memory: about 6 KB per point and camera)
+  int max_width = 0;     // 0 = the calibration's image size
   int max_height = 0;
 };
 
@@ -102,17 +102,37 @@ class KltFrontend {
     int current = 0;
     std::vector<std::uint64_t> ids, next_ids;
     std::vector<Eigen::Vector2f> points, next_points;
+    // Each point's templates in the current image (all levels), in a pool of fixed slots. The
+    // backward track of one frame builds exactly the templates the next frame's forward track needs,
+    // so a kept point takes over its backward slot instead of rebuilding.
+    std::vector<int> slots, next_slots;
+    std::vector<PatchTemplate> pool;
+    std::vector<int> free_slots;
+    int num_levels = 0;
     MotionField last_p_frame;
     bool have_last_p_frame = false;
     std::vector<PointTrace> traces;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
+    std::span<PatchTemplate> slot(int index) {
+      return {pool.data() + static_cast<std::ptrdiff_t>(index) * num_levels, static_cast<std::size_t>(num_levels)};
+    }
+    int acquire() {
+      const int index = free_slots.back();
+      free_slots.pop_back();
+      return index;
+    }
+    void release(int index) { free_slots.push_back(index); }
+    void resetSlots();
   };
 
   // Forward-backward tracking from `from` to `to` with a flow guess; true and the converged position
   // when both directions converge and the round trip returns within max_recovered_dist2.
-  bool trackChecked(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& result) const;
+  // `forward` holds the templates of p in `from` (shared by all guesses of one point); `backward`
+  // receives the templates at the result in `to`.
+  bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
+                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, std::span<PatchTemplate> backward,
+                    Eigen::Vector2f& result) const;
   const MotionField* priorField(int camera, const FrontendInput& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   void detectAndMatch(const FrontendInput& input, FrontendStats& stats);

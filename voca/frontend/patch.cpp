@@ -1,6 +1,7 @@
 #include "voca/frontend/patch.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 namespace voca {
@@ -14,6 +15,9 @@ PatchPattern makePattern(std::initializer_list<std::pair<int, int>> rows) {
     for (int px = -max_x; px <= max_x; px += 2) {
       pattern.x[static_cast<std::size_t>(pattern.size)] = static_cast<float>(px);
       pattern.y[static_cast<std::size_t>(pattern.size)] = static_cast<float>(row_y);
+      pattern.max_abs =
+          std::max({pattern.max_abs, std::abs(static_cast<float>(px)), std::abs(static_cast<float>(row_y))});
+      pattern.max_norm = std::max(pattern.max_norm, std::hypot(static_cast<float>(px), static_cast<float>(row_y)));
       ++pattern.size;
     }
   }
@@ -38,33 +42,6 @@ const PatchPattern* patternBySize(int size) {
   return nullptr;
 }
 
-float sampleBilinear(const FloatView& image, float x, float y) {
-  const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= 1: truncation is floor
-  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
-  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
-  const float* r1 = r0 + image.stride;
-  const float top = r0[0] + fx * (r0[1] - r0[0]);
-  const float bottom = r1[0] + fx * (r1[1] - r1[0]);
-  return top + fy * (bottom - top);
-}
-
-Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float y) {
-  const int ix = static_cast<int>(x), iy = static_cast<int>(y);
-  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
-  const std::ptrdiff_t s = image.stride;
-  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * s + ix;
-  const float* r1 = r0 + s;
-  const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
-  const float value = w00 * r0[0] + w10 * r0[1] + w01 * r1[0] + w11 * r1[1];
-  // Central differences at the four corners, interpolated with the same weights: smoother than the
-  // piecewise-constant derivative of the bilinear surface, which helps convergence.
-  const float gx =
-      0.5f * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
-  const float gy =
-      0.5f * (w00 * (r1[0] - r0[-s]) + w10 * (r1[1] - r0[1 - s]) + w01 * (r1[s] - r0[0]) + w11 * (r1[s + 1] - r0[1]));
-  return {value, gx, gy};
-}
-
 void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern) {
   size = pattern.size;
   valid = false;
@@ -72,23 +49,53 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   std::array<float, PatchPattern::kMaxSize> jpix[3];
   float sum = 0.f;
   int count = 0;
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const float x = center.x() + pattern.x[k], y = center.y() + pattern.y[k];
-    if (!canSample(image, x, y)) {
-      value[k] = -1.f;
-      jpix[0][k] = jpix[1][k] = jpix[2][k] = 0.f;
-      continue;
+  const float half = pattern.max_abs;
+  if (canSample(image, center.x() - half, center.y() - half) &&
+      canSample(image, center.x() + half, center.y() + half)) {
+    // Fast path, the whole patch inside: pattern offsets are integers, so every sample has the same
+    // bilinear weights and only the base pointer moves.
+    const int ix = static_cast<int>(center.x()), iy = static_cast<int>(center.y());
+    const float fx = center.x() - static_cast<float>(ix), fy = center.y() - static_cast<float>(iy);
+    const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
+    const std::ptrdiff_t st = image.stride;
+    const float* base = image.data + static_cast<std::ptrdiff_t>(iy) * st + ix;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const float* r0 =
+          base + static_cast<std::ptrdiff_t>(pattern.y[k]) * st + static_cast<std::ptrdiff_t>(pattern.x[k]);
+      const float* r1 = r0 + st;
+      const float v = w00 * r0[0] + w10 * r0[1] + w01 * r1[0] + w11 * r1[1];
+      const float gx =
+          0.5f * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
+      const float gy = 0.5f * (w00 * (r1[0] - r0[-st]) + w10 * (r1[1] - r0[1 - st]) + w01 * (r1[st] - r0[0]) +
+                               w11 * (r1[st + 1] - r0[1]));
+      value[k] = v;
+      jpix[0][k] = gx;
+      jpix[1][k] = gy;
+      jpix[2][k] = -gx * pattern.y[k] + gy * pattern.x[k];
+      sum += v;
     }
-    const Eigen::Vector3f vg = sampleWithGradient(image, x, y);
-    value[k] = vg[0];
-    // d I(center + R(theta) q + t) / d (tx, ty, theta) at identity: (gx, gy, -gx qy + gy qx).
-    jpix[0][k] = vg[1];
-    jpix[1][k] = vg[2];
-    jpix[2][k] = -vg[1] * pattern.y[k] + vg[2] * pattern.x[k];
-    sum += vg[0];
-    ++count;
+    count = n;
+  } else {
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const float x = center.x() + pattern.x[k], y = center.y() + pattern.y[k];
+      if (!canSample(image, x, y)) {
+        value[k] = -1.f;
+        jpix[0][k] = jpix[1][k] = jpix[2][k] = 0.f;
+        continue;
+      }
+      const Eigen::Vector3f vg = sampleWithGradient(image, x, y);
+      value[k] = vg[0];
+      // d I(center + R(theta) q + t) / d (tx, ty, theta) at identity: (gx, gy, -gx qy + gy qx).
+      jpix[0][k] = vg[1];
+      jpix[1][k] = vg[2];
+      jpix[2][k] = -vg[1] * pattern.y[k] + vg[2] * pattern.x[k];
+      sum += vg[0];
+      ++count;
+    }
   }
+  all_points_valid = count == n;
   if (2 * count <= n || !(sum > 1e-3f * static_cast<float>(count))) return;
   const float mean = sum / static_cast<float>(count);
   const float inv_mean = 1.f / mean;
@@ -99,21 +106,24 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   }
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
-  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    if (value[k] < 0.f) {
-      jac[0][k] = jac[1][k] = jac[2][k] = 0.f;
-      continue;
-    }
-    value[k] *= inv_mean;
-    Eigen::Vector3d j;
-    for (int c = 0; c < 3; ++c) {
-      jac[c][k] = (jpix[c][k] - value[k] * jsum[c]) * inv_mean;
-      j[c] = jac[c][k];
-    }
-    hessian.noalias() += j * j.transpose();
+    const bool ok = value[k] >= 0.f;
+    value[k] = ok ? value[k] * inv_mean : -1.f;
+    for (int c = 0; c < 3; ++c) jac[c][k] = ok ? (jpix[c][k] - value[k] * jsum[c]) * inv_mean : 0.f;
   }
+  // H = J^T J from six float dot products over contiguous arrays (vectorisable).
+  float h[3][3];
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a; b < 3; ++b) {
+      float acc = 0.f;
+      for (int i = 0; i < n; ++i) acc += jac[a][static_cast<std::size_t>(i)] * jac[b][static_cast<std::size_t>(i)];
+      h[a][b] = h[b][a] = acc;
+    }
+  }
+  Eigen::Matrix3d hessian;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) hessian(a, b) = h[a][b];
   const double trace = hessian.trace();
   const double det = hessian.determinant();
   // Scale-free test for an untextured (rank-deficient) patch.
@@ -139,8 +149,27 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
   const int n = tmpl.size;
   const float c = T.unitComplex().x(), s = T.unitComplex().y();
   const float tx = T.translation().x(), ty = T.translation().y();
+  const float r = pattern.max_norm;
   float sum = 0.f;
   int count = 0;
+  if (tmpl.all_points_valid && canSample(target, tx - r, ty - r) && canSample(target, tx + r, ty + r)) {
+    // Fast path, every point valid on both sides: no per-point tests.
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const float x = c * pattern.x[k] - s * pattern.y[k] + tx;
+      const float y = s * pattern.x[k] + c * pattern.y[k] + ty;
+      residual[k] = sampleBilinear(target, x, y);
+    }
+    for (int i = 0; i < n; ++i) sum += residual[static_cast<std::size_t>(i)];
+    count = n;
+    if (!(sum > 1e-3f * static_cast<float>(count))) return 0;
+    const float inv_mean = static_cast<float>(count) / sum;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      residual[k] = residual[k] * inv_mean - tmpl.value[k];
+    }
+    return count;
+  }
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const float x = c * pattern.x[k] - s * pattern.y[k] + tx;
@@ -163,12 +192,13 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
 }
 
 AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern,
-                       const AlignParams& params, SE2f& T) {
+                       const AlignParams& params, SE2f& T, bool coarse) {
   if (!tmpl.valid) return AlignStatus::kTemplateInvalid;
   alignas(32) std::array<float, PatchPattern::kMaxSize> residual;
   const int n = tmpl.size;
   const float max_step2 = params.max_step_px * params.max_step_px;
-  const float min_step2 = params.min_step_px * params.min_step_px;
+  const float min_step = coarse ? params.coarse_min_step_px : params.min_step_px;
+  const float min_step2 = min_step * min_step;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
     const int used = patchResidual(target, tmpl, pattern, T, residual);
     if (2 * used <= n) return AlignStatus::kTooFewPoints;
@@ -189,24 +219,37 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
   return AlignStatus::kConverged;
 }
 
-AlignStatus trackPatch(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& from_px,
-                       const PatchPattern& pattern, const AlignParams& params, int num_levels, SE2f& T) {
-  PatchTemplate tmpl;
-  for (int level = num_levels - 1; level >= 0; --level) {
-    const float scale = static_cast<float>(1 << level);
-    const float inv_scale = 1.f / scale;
-    tmpl.build(from.level(level), from_px * inv_scale, pattern);
+void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
+                       std::span<PatchTemplate> levels) {
+  for (std::size_t level = 0; level < levels.size(); ++level) {
+    levels[level].build(pyramid.level(static_cast<int>(level)), px / static_cast<float>(1 << level), pattern);
+  }
+}
+
+AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
+                       const AlignParams& params, SE2f& T) {
+  for (int level = static_cast<int>(from.size()) - 1; level >= 0; --level) {
+    const PatchTemplate& tmpl = from[static_cast<std::size_t>(level)];
     if (!tmpl.valid) {
       // A coarse level may lack texture or room near the border: the finer levels still decide.
       if (level > 0) continue;
       return AlignStatus::kTemplateInvalid;
     }
-    T.translation() *= inv_scale;
-    const AlignStatus status = alignPatch(to.level(level), tmpl, pattern, params, T);
+    const float scale = static_cast<float>(1 << level);
+    T.translation() /= scale;
+    const AlignStatus status = alignPatch(to.level(level), tmpl, pattern, params, T, level > 0);
     T.translation() *= scale;
     if (status != AlignStatus::kConverged) return status;
   }
   return AlignStatus::kConverged;
+}
+
+AlignStatus trackPatch(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& from_px,
+                       const PatchPattern& pattern, const AlignParams& params, int num_levels, SE2f& T) {
+  std::array<PatchTemplate, ImagePyramid::kMaxLevels> levels;
+  const std::span<PatchTemplate> used(levels.data(), static_cast<std::size_t>(num_levels));
+  buildPyramidPatch(from, from_px, pattern, used);
+  return trackPatch(used, to, pattern, params, T);
 }
 
 }  // namespace voca

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <span>
 
 #include "voca/frontend/pyramid.h"
 #include "voca/geometry/se2.h"
@@ -17,6 +18,8 @@ struct PatchPattern {
   int size = 0;
   std::array<float, kMaxSize> x{};
   std::array<float, kMaxSize> y{};
+  float max_abs = 0.f;   // largest |x| or |y|: bounds the unrotated patch
+  float max_norm = 0.f;  // largest |(x, y)|: bounds the patch under any rotation
 };
 
 const PatchPattern& pattern24();
@@ -30,9 +33,33 @@ inline bool canSample(const FloatView& image, float x, float y) {
   return x >= 1.f && y >= 1.f && x < static_cast<float>(image.width - 2) && y < static_cast<float>(image.height - 2);
 }
 // Bilinear interpolation; (0, 0) is the centre of the top-left pixel. Requires canSample().
-float sampleBilinear(const FloatView& image, float x, float y);
+inline float sampleBilinear(const FloatView& image, float x, float y) {
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);  // x, y >= 1: truncation is floor
+  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
+  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
+  const float* r1 = r0 + image.stride;
+  const float top = r0[0] + fx * (r0[1] - r0[0]);
+  const float bottom = r1[0] + fx * (r1[1] - r1[0]);
+  return top + fy * (bottom - top);
+}
+
 // Bilinear interpolation of the value and of the central-difference gradient. Requires canSample().
-Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float y);
+inline Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float y) {
+  const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+  const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
+  const std::ptrdiff_t s = image.stride;
+  const float* r0 = image.data + static_cast<std::ptrdiff_t>(iy) * s + ix;
+  const float* r1 = r0 + s;
+  const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
+  const float value = w00 * r0[0] + w10 * r0[1] + w01 * r1[0] + w11 * r1[1];
+  // Central differences at the four corners, interpolated with the same weights: smoother than the
+  // piecewise-constant derivative of the bilinear surface, which helps convergence.
+  const float gx =
+      0.5f * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
+  const float gy =
+      0.5f * (w00 * (r1[0] - r0[-s]) + w10 * (r1[1] - r0[1 - s]) + w01 * (r1[s] - r0[0]) + w11 * (r1[s + 1] - r0[1]));
+  return {value, gx, gy};
+}
 
 // The template side of the alignment: mean-normalised intensities of the pattern around a point in
 // the reference image, the Jacobian of the normalised residual with respect to an SE(2) increment
@@ -45,6 +72,7 @@ struct PatchTemplate {
   alignas(32) std::array<float, PatchPattern::kMaxSize> jac[3]{};   // d residual / d (tx, ty, theta)
   alignas(32) std::array<float, PatchPattern::kMaxSize> step[3]{};  // rows of H^-1 J^T
   bool valid = false;
+  bool all_points_valid = false;  // no point marked invalid: residuals may skip the per-point test
 
   // Samples the template at `center` (level pixels). valid is false when fewer than half of the
   // points can be sampled, the patch is black or H is singular (no texture).
@@ -64,14 +92,28 @@ struct AlignParams {
   int max_iterations = 5;
   // A step whose translation exceeds this (level pixels) means the linearisation is meaningless.
   float max_step_px = 20.f;
-  // Iterations stop early once the step's translation is below this (level pixels).
-  float min_step_px = 1e-3f;
+  // Iterations stop early once the step's translation is below this (level pixels) on level 0, and
+  // below coarse_min_step_px on coarser levels, whose result the finer levels refine anyway.
+  float min_step_px = 2e-3f;
+  float coarse_min_step_px = 0.05f;
 };
 
 // Refines T (pattern offset -> target level pixels) on one level by inverse-compositional Gauss-Newton,
 // T <- T exp(-H^-1 J^T r). Fails on non-finite or huge steps, fewer than half of the pattern points
 // inside the target, or the patch centre leaving the target image.
 AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern,
+                       const AlignParams& params, SE2f& T, bool coarse = false);
+
+// The templates of one point on every level of a pyramid: levels[l] at px / 2^l in level l, for
+// l < levels.size(). Built once and used for every guess tracked from that point.
+void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
+                       std::span<PatchTemplate> levels);
+
+// Coarse-to-fine alignment of prebuilt templates into pyramid `to`: T is initialised by the caller
+// (translation = guessed level-0 position, rotation usually identity) and holds the converged warp in
+// level-0 pixels on success. A coarse level whose template is invalid (no texture or too close to the
+// border at that scale) is skipped; an invalid level-0 template fails.
+AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
                        const AlignParams& params, SE2f& T);
 
 // Coarse-to-fine alignment over pyramids: the template around `from_px` (level-0 pixels) in `from`,
