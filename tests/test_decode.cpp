@@ -117,7 +117,7 @@ Agreement compare(const std::vector<DecodedFrame>& frames, const Motion& to_text
       // Blocks near the border see content entering the picture: no true match exists there.
       if (b.x < 16 || b.y < 16 || b.x + b.w > kWidth - 16 || b.y + b.h > kHeight - 16) continue;
       if (blockStdDev(f.luma, b) < 10.0) continue;
-      const Eigen::Vector2d c(b.centreX() - 0.5, b.centreY() - 0.5);  // pixel-centre coordinates
+      const Eigen::Vector2d c(b.centreX(), b.centreY());  // pixel-centre coordinates, like the renderer
       // The content at c came from the point of frame k-1 that shows the same texture point.
       const Eigen::Vector2d t = to_texture(c, int(k));
       // Invert frame k-1's mapping numerically (Newton on a smooth map, converges in a few steps).

@@ -3,6 +3,7 @@
 
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -84,7 +85,13 @@ TEST_CASE("every pixel maps to the block covering it, uncovered pixels to none")
   CHECK(field.blockAt(-1, 0) == nullptr);
   CHECK(field.blockAt(width, 0) == nullptr);
   CHECK(field.blockAt(0, height) == nullptr);
-  CHECK_FALSE(field.forwardFlowAt(-0.5f, 3.f).has_value());
+  // Pixel (0, y) spans x in [-0.5, 0.5): just left of that is outside.
+  CHECK_FALSE(field.forwardFlowAt(-0.51f, 3.f).has_value());
+  CHECK(field.forwardFlowAt(-0.5f, 3.f).has_value() == (field.blockAt(0, 3) != nullptr));
+  // Far outside and NaN: no vector (and no undefined float-to-int conversion).
+  CHECK_FALSE(field.forwardFlowAt(1e10f, 3.f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(3.f, -1e10f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(std::nanf(""), 3.f).has_value());
 }
 
 TEST_CASE("forward flow is the stored displacement of the block at a sub-pixel position") {
@@ -92,12 +99,18 @@ TEST_CASE("forward flow is the stored displacement of the block at a sub-pixel p
   field.reset(64, 64, PictureType::kP);
   REQUIRE(field.addBlock(16, 16, 16, 16, 1.25f, -0.5f));
   field.finalize();
-  const auto flow = field.forwardFlowAt(31.9f, 16.0f);
+  // Pixel-centre coordinates: the block's pixels 16..31 span [15.5, 31.5).
+  const auto flow = field.forwardFlowAt(31.49f, 16.0f);
   REQUIRE(flow.has_value());
-  CHECK((*flow)(0) == doctest::Approx(1.25f));
-  CHECK((*flow)(1) == doctest::Approx(-0.5f));
-  CHECK_FALSE(field.forwardFlowAt(32.0f, 16.0f).has_value());
-  CHECK_FALSE(field.forwardFlowAt(15.99f, 20.0f).has_value());
+  CHECK((*flow)(0) == 1.25f);  // stored and returned unchanged
+  CHECK((*flow)(1) == -0.5f);
+  CHECK(field.forwardFlowAt(15.5f, 20.0f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(31.5f, 16.0f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(15.49f, 20.0f).has_value());
+  CHECK_FALSE(field.forwardFlowAt(20.0f, 31.5f).has_value());
+  // The block centre in the same convention.
+  CHECK(field.blocks()[0].centreX() == 23.5f);
+  CHECK(field.blocks()[0].centreY() == 23.5f);
 }
 
 TEST_CASE("past-reference vectors win over future-reference ones in the lookup") {
@@ -132,6 +145,34 @@ TEST_CASE("I-frames and reset fields have no vectors; capacity is fixed") {
   // A block entirely outside the image is refused.
   field.reset(64, 48, PictureType::kP);
   CHECK_FALSE(field.addBlock(64, 0, 16, 16, 0.f, 0.f));
+}
+
+TEST_CASE("copies keep the full capacity, so a copied field still takes a whole frame") {
+  MotionField field(64, 48);
+  field.reset(64, 48, PictureType::kP);
+  REQUIRE(field.addBlock(0, 0, 16, 16, 1.f, 2.f));
+  field.finalize();
+  const auto checkCopy = [&](MotionField& copy) {
+    CHECK(copy.blockCapacity() == field.blockCapacity());
+    REQUIRE(copy.blocks().size() == 1);
+    REQUIRE(copy.blockAt(15, 15) != nullptr);
+    CHECK(copy.blockAt(15, 15)->dy == 2.f);
+    CHECK(copy.blockAt(16, 15) == nullptr);
+    // A later frame with the smallest partitions everywhere must fit.
+    copy.reset(64, 48, PictureType::kP);
+    std::size_t accepted = 0;
+    for (int y = 0; y < 48; y += 4)
+      for (int x = 0; x < 64; x += 4) accepted += copy.addBlock(x, y, 4, 4, 0.f, 0.f) ? 1 : 0;
+    CHECK(accepted == 16u * 12u);
+  };
+  MotionField constructed(field);
+  checkCopy(constructed);
+  MotionField assigned;
+  assigned = field;
+  checkCopy(assigned);
+  MotionField smaller(16, 16);
+  smaller = field;
+  checkCopy(smaller);
 }
 
 TEST_CASE("I-frame bridging carries the last P-frame's field, flagged as bridged") {

@@ -49,6 +49,19 @@ MotionField::MotionField(int max_width, int max_height) : max_width_(max_width),
   visit_stamp_.assign(2 * cells, 0);
 }
 
+MotionField::MotionField(const MotionField& other) : MotionField(other.max_width_, other.max_height_) {
+  copyFrom(other);
+}
+
+MotionField& MotionField::operator=(const MotionField& other) {
+  if (this == &other) return *this;
+  if (max_width_ != other.max_width_ || max_height_ != other.max_height_) {
+    *this = MotionField(other.max_width_, other.max_height_);
+  }
+  copyFrom(other);
+  return *this;
+}
+
 void MotionField::reset(int width, int height, PictureType type) {
   if (width < 0 || height < 0 || width > max_width_ || height > max_height_) {
     throw std::length_error("MotionField: frame larger than the capacity set at construction");
@@ -108,8 +121,13 @@ void MotionField::finalize() {
 }
 
 std::optional<Eigen::Vector2f> MotionField::forwardFlowAt(float x, float y) const {
-  if (!(x >= 0.f && y >= 0.f)) return std::nullopt;  // also rejects NaN
-  const MotionBlock* block = blockAt(static_cast<int>(x), static_cast<int>(y));
+  // The pixel containing (x, y) is floor(x + 0.5); checking the range first keeps the conversion to
+  // int defined for any float (and rejects NaN).
+  const float px = std::floor(x + 0.5f), py = std::floor(y + 0.5f);
+  if (!(px >= 0.f && py >= 0.f && px < static_cast<float>(width_) && py < static_cast<float>(height_))) {
+    return std::nullopt;
+  }
+  const MotionBlock* block = blockAt(static_cast<int>(px), static_cast<int>(py));
   if (block == nullptr) return std::nullopt;
   return Eigen::Vector2f(block->dx, block->dy);
 }
@@ -165,8 +183,9 @@ int MotionField::flagOutliers(const OutlierParams& params) {
         stamp_ = 1;
       }
       visit_stamp_[i] = stamp_;
-      const int ccx = static_cast<int>(block.centreX()) / kCellPx;
-      const int ccy = static_cast<int>(block.centreY()) / kCellPx;
+      // The pixel nearest the centre (the centre of an even-sized block lies between two pixels).
+      const int ccx = static_cast<int>(std::lround(block.centreX())) / kCellPx;
+      const int ccy = static_cast<int>(std::lround(block.centreY())) / kCellPx;
       std::size_t count = 0;
       for (int cy = std::max(0, ccy - radius_cells); cy <= std::min(cells_y - 1, ccy + radius_cells); ++cy) {
         for (int cx = std::max(0, ccx - radius_cells); cx <= std::min(cells_x - 1, ccx + radius_cells); ++cx) {

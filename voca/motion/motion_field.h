@@ -18,19 +18,21 @@ enum class RefDirection : std::uint8_t { kPast, kFuture };
 
 const char* pictureTypeName(PictureType type);
 
-// One inter-predicted block. (x, y, w, h) is its rectangle in the current frame (pixels, clipped to
-// the image); (dx, dy) is the forward displacement in pixels: a point of the reference frame at p
-// is at p + (dx, dy) in this frame when ref is kPast (the codec vector negated, DESIGN.md section 4).
-// For kFuture the vector is stored the same way relative to the future reference: the point of the
-// future reference at p is at p + (dx, dy) here.
+// One inter-predicted block. (x, y, w, h) is its rectangle in the current frame: the pixels x..x+w-1
+// and y..y+h-1, clipped to the image; (dx, dy) is the forward displacement in pixels: a point of the reference frame at
+// p is at p + (dx, dy) in this frame when ref is kPast (the codec vector negated, DESIGN.md section 4). For kFuture the
+// vector is stored the same way relative to the future reference: the point of the future reference at p is at p + (dx,
+// dy) here.
 struct MotionBlock {
   std::int16_t x = 0, y = 0, w = 0, h = 0;
   float dx = 0.f, dy = 0.f;
   RefDirection ref = RefDirection::kPast;
   bool outlier = false;  // set by MotionField::flagOutliers()
 
-  float centreX() const { return static_cast<float>(x) + 0.5f * static_cast<float>(w); }
-  float centreY() const { return static_cast<float>(y) + 0.5f * static_cast<float>(h); }
+  // Centre in pixel-centre coordinates ((0, 0) is the centre of the top-left pixel): a 16-pixel
+  // block at x = 0 has its centre at 7.5.
+  float centreX() const { return static_cast<float>(x) + 0.5f * static_cast<float>(w - 1); }
+  float centreY() const { return static_cast<float>(y) + 0.5f * static_cast<float>(h - 1); }
 };
 
 // Median thresholding of vectors (the paper's Fig. 3): a block is flagged when its displacement
@@ -54,6 +56,12 @@ class MotionField {
 
   MotionField() = default;
   MotionField(int max_width, int max_height);
+  // Copies keep the capacity of the source: a plain vector copy would shrink the block storage to
+  // the source's block count, and the copy would then silently refuse blocks of a later frame.
+  MotionField(const MotionField& other);
+  MotionField& operator=(const MotionField& other);
+  MotionField(MotionField&&) noexcept = default;
+  MotionField& operator=(MotionField&&) noexcept = default;
 
   int maxWidth() const { return max_width_; }
   int maxHeight() const { return max_height_; }
@@ -78,7 +86,9 @@ class MotionField {
     const std::int32_t index = grid_[static_cast<std::size_t>(y / kCellPx) * grid_stride_ + x / kCellPx];
     return index == kNoBlock ? nullptr : &blocks_[static_cast<std::size_t>(index)];
   }
-  // Forward flow at a sub-pixel position (the block containing it), or nullopt for "no vector".
+  // Forward flow at a sub-pixel position in pixel-centre coordinates ((0, 0) is the centre of the
+  // top-left pixel, so pixel (i, j) spans [i - 0.5, i + 0.5) x [j - 0.5, j + 0.5)): the block of the
+  // pixel containing it, or nullopt for "no vector".
   std::optional<Eigen::Vector2f> forwardFlowAt(float x, float y) const;
 
   std::span<const MotionBlock> blocks() const { return blocks_; }
