@@ -91,6 +91,7 @@ struct VideoDecoder::Impl {
   std::int64_t frames_out = 0;
   std::int64_t last_packet = -1;
 
+  CodecPtr allocContext(const AVCodec* codec) const;
   CodecPtr openSoftware(bool motion_only) const;
   CodecPtr openVaapi();
   CodecPtr openV4l2m2m() const;
@@ -108,15 +109,21 @@ void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
   throw RuntimeFailure(source + ": decoder failure " + what + " (" + avErrorText(rc) + ")");
 }
 
-CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
-  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
-  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
+// A context for `codec` that knows the stream's frame size, time base and out-of-band headers.
+CodecPtr VideoDecoder::Impl::allocContext(const AVCodec* codec) const {
   CodecPtr ctx(avcodec_alloc_context3(codec));
   if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
   ctx->width = stream.width;
   ctx->height = stream.height;
   ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
   setExtradata(ctx.get(), stream);
+  return ctx;
+}
+
+CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
+  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
+  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
+  CodecPtr ctx = allocContext(codec);
   // One thread, slice threading only: frame threading delays output and costs memory per thread.
   ctx->thread_count = 1;
   ctx->thread_type = FF_THREAD_SLICE;
@@ -141,13 +148,9 @@ CodecPtr VideoDecoder::Impl::openVaapi() {
     throw RuntimeFailure("cannot open VAAPI device " + options.vaapi_device + " (" + avErrorText(rc) + ")");
   }
   hw_device.reset(device);
-  CodecPtr ctx(avcodec_alloc_context3(codec));
-  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
-  ctx->width = stream.width;
-  ctx->height = stream.height;
-  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
-  setExtradata(ctx.get(), stream);
+  CodecPtr ctx = allocContext(codec);
   ctx->hw_device_ctx = av_buffer_ref(hw_device.get());
+  if (ctx->hw_device_ctx == nullptr) throw RuntimeFailure("out of memory referencing the VAAPI device");
   ctx->get_format = pickVaapiFormat;
   ctx->thread_count = 1;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
@@ -160,12 +163,7 @@ CodecPtr VideoDecoder::Impl::openV4l2m2m() const {
   const char* name = detail::v4l2m2mDecoderName(stream.codec);
   const AVCodec* codec = name == nullptr ? nullptr : avcodec_find_decoder_by_name(name);
   if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no V4L2 M2M decoder for " + stream.codec_name);
-  CodecPtr ctx(avcodec_alloc_context3(codec));
-  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
-  ctx->width = stream.width;
-  ctx->height = stream.height;
-  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
-  setExtradata(ctx.get(), stream);
+  CodecPtr ctx = allocContext(codec);
   const int rc = avcodec_open2(ctx.get(), codec, nullptr);
   if (rc < 0) {
     throw RuntimeFailure(source + ": cannot open " + name + " (" + avErrorText(rc) +
