@@ -24,7 +24,7 @@ struct RgbVideoWriter::Impl {
   std::unique_ptr<AVPacket, detail::PacketDeleter> packet;
   SwsContext* sws = nullptr;
   std::int64_t next_pts = 0;
-  bool header_written = false, finished = false;
+  bool header_written = false, finished = false, open_failed = false;
 
   ~Impl() {
     sws_freeContext(sws);
@@ -110,7 +110,16 @@ void RgbVideoWriter::Impl::drain() {
 void RgbVideoWriter::write(RgbView image) {
   Impl& d = *impl_;
   if (d.finished) throw InputError(d.path.string() + ": write after finish");
-  if (!d.codec) d.open(image.width, image.height);
+  if (d.open_failed) throw InputError(d.path.string() + ": the video could not be opened (see the first error)");
+  if (!d.codec) {
+    try {
+      d.open(image.width, image.height);
+    } catch (...) {
+      // A half-opened encoder (no scaler, maybe no header) must not be used by a later write().
+      d.open_failed = true;
+      throw;
+    }
+  }
   if ((image.width & ~1) != d.codec->width || (image.height & ~1) != d.codec->height) {
     throw InputError(d.path.string() + ": frame size changed to " + std::to_string(image.width) + "x" +
                      std::to_string(image.height));
@@ -127,7 +136,7 @@ void RgbVideoWriter::write(RgbView image) {
 
 void RgbVideoWriter::finish() {
   Impl& d = *impl_;
-  if (d.finished || !d.header_written) {
+  if (d.finished || !d.header_written || d.open_failed) {
     d.finished = true;
     return;
   }
