@@ -57,6 +57,9 @@ FrameRange parseFrameRange(const std::string& text) {
   };
   if (colon == std::string::npos) {
     parse(text, range.first);  // a single index
+    if (range.first == std::numeric_limits<std::int64_t>::max()) {
+      throw voca::InputError("--frames '" + text + "': frame index out of range");
+    }
     range.end = range.first + 1;
     return range;
   }
@@ -129,7 +132,7 @@ void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage
       const float cx = b.centreX(), cy = b.centreY();
       const Rgb8 colour = outliers ? kOutlierColour : kVectorColour;
       if (b.dx == 0.f && b.dy == 0.f) {
-        plot(out, static_cast<int>(cx), static_cast<int>(cy), colour);
+        plot(out, static_cast<int>(std::lround(cx)), static_cast<int>(std::lround(cy)), colour);
       } else {
         drawArrow(out, cx, cy, cx + arrow_scale * b.dx, cy + arrow_scale * b.dy, colour);
       }
