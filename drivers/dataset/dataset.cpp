@@ -14,6 +14,8 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kWarningExamples = 3;
+// Below INT64_MAX nanoseconds (9.22e9 s) with room for the rounding of the product.
+constexpr double kMaxSeconds = 9.0e9;
 
 std::string_view trim(std::string_view s) {
   const auto not_space = [](char c) { return c != ' ' && c != '\t' && c != '\r' && c != '\n'; };
@@ -208,7 +210,8 @@ void readKitti(const fs::path& root, Dataset& dataset) {
   int index = 0;
   for (const Line& line : readLines(times)) {
     double seconds = 0.0;
-    if (!parseDouble(line.text, seconds) || seconds < 0.0) {
+    // int64 nanoseconds end after ~292 years; llround of a larger value is undefined, not an error.
+    if (!parseDouble(line.text, seconds) || seconds < 0.0 || seconds >= kMaxSeconds) {
       throw InputError(where(times, line.number) + ": expected a time in seconds, got '" + line.text + "'");
     }
     const int64_t t_ns = std::llround(seconds * 1e9);

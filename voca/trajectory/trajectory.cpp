@@ -400,7 +400,12 @@ std::optional<SE3d> interpolatePose(const Trajectory& trajectory, int64_t t_ns) 
   const TimedPose& p0 = *std::prev(after);
   if (p0.t_ns == t_ns || after == poses.end()) return p0.T_world_body;
   const TimedPose& p1 = *after;
-  const double alpha = static_cast<double>(t_ns - p0.t_ns) / static_cast<double>(p1.t_ns - p0.t_ns);
+  // p0.t_ns <= t_ns < p1.t_ns: the differences are in [0, 2^64), exact in unsigned arithmetic even
+  // where the signed subtraction would overflow.
+  const auto since = [](int64_t later, int64_t earlier) {
+    return static_cast<double>(static_cast<uint64_t>(later) - static_cast<uint64_t>(earlier));
+  };
+  const double alpha = since(t_ns, p0.t_ns) / since(p1.t_ns, p0.t_ns);
   const Eigen::Vector3d t = (1.0 - alpha) * p0.T_world_body.translation() + alpha * p1.T_world_body.translation();
   const Eigen::Quaterniond q = p0.T_world_body.unitQuaternion().slerp(alpha, p1.T_world_body.unitQuaternion());
   return SE3d(q, t);
