@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <charconv>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -39,12 +41,15 @@ class Field {
     }
     return Field(child, path, file_);
   }
+  // Parsed with std::from_chars: yaml-cpp's as<double> goes through a stringstream, which follows
+  // the global C++ locale (a decimal comma would misread "0.5").
   double number() const {
     if (node_.IsScalar()) {
-      try {
-        return node_.as<double>();
-      } catch (const YAML::Exception&) {
-      }
+      std::string_view text = node_.Scalar();
+      if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+      double value = 0.0;
+      const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (!text.empty() && ec == std::errc() && end == text.data() + text.size() && std::isfinite(value)) return value;
     }
     fail("expected a number, got " + describe());
   }
