@@ -115,7 +115,10 @@ GenericCamera<double> readCamera(const Field& entry) {
   std::vector<double> params;
   for (const char* name : names) params.push_back(intrinsics[name].number());
   // Unknown keys are usually typos of a parameter that then silently took no effect.
-  for (const auto& [key, value] : intrinsics.value().items()) {
+  for (const auto& item : intrinsics.value().items()) {
+    // A named reference, not a structured binding: lambdas capture bindings only from C++20 on
+    // and Clang (clang-tidy, other compilers) rejects it.
+    const std::string& key = item.key();
     const bool known = std::find_if(names.begin(), names.end(), [&](const char* n) { return key == n; }) != names.end();
     // Basalt may store radtan8's valid radius; our model derives it from the coefficients.
     if (!known && !(type == PinholeRadtan8Camera<double>::kName && key == "rpmax")) {
