@@ -153,6 +153,7 @@ int runEval(const EvalCommandOptions& cli) {
     if (!cli.calib_path.empty()) j["calibration"] = cli.calib_path;
     std::ofstream out(cli.json_path);
     out << j.dump(2) << '\n';
+    out.close();  // a full disk shows only when the buffer is written out
     if (!out) throw voca::InputError(fmt::format("cannot write {}", cli.json_path));
   }
   return 0;
