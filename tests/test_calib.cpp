@@ -16,27 +16,11 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using voca::SE3d;
 
-void writeText(const fs::path& path, const std::string& text) {
-  fs::create_directories(path.parent_path());
-  std::ofstream(path) << text;
-}
+using voca::test::expectError;
+using voca::test::writeText;
 
 std::string errorOf(const fs::path& path) {
-  try {
-    voca::loadCalibration(path);
-  } catch (const voca::InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// Checks that an error message contains the expected part, showing the whole message on failure.
-void expectError(const std::string& error, const std::string& part) {
-  INFO("message: " << error);
-  INFO("expected part: " << part);
-  CHECK(contains(error, part));
+  return voca::test::inputErrorOf([&] { voca::loadCalibration(path); });
 }
 
 // The camera poses used below: cam1 11 cm to the right of cam0 and slightly rotated, both
@@ -286,6 +270,14 @@ TEST_CASE("malformed Kalibr camchains name the file and the field") {
   expectError(errorFor(camchain("", good1, "[457.5, fast, 380.0, 255.0]")),
               "chain.yaml: cam1.intrinsics[1] (line 17): expected a number, got 'fast'");
   expectError(errorFor(camchain("", good1, "abc")), "cam1.intrinsics (line 17): expected a list of numbers, got 'abc'");
+  // Non-finite values and decimal commas are not numbers; a leading '+' is (YAML allows it).
+  expectError(errorFor(camchain("", good1, "[457.5, .nan, 380.0, 255.0]")),
+              "chain.yaml: cam1.intrinsics[1] (line 17): expected a number, got '.nan'");
+  expectError(errorFor(camchain("", good1, "[457.5, .inf, 380.0, 255.0]")),
+              "chain.yaml: cam1.intrinsics[1] (line 17): expected a number, got '.inf'");
+  expectError(errorFor(camchain("", good1, "[457.5, \"456,1\", 380.0, 255.0]")),
+              "chain.yaml: cam1.intrinsics[1] (line 17): expected a number, got '456,1'");
+  CHECK(errorFor(camchain("", good1, "[457.5, +456.1, 380.0, 255.0]")) == "(no error)");
   expectError(errorFor(camchain("", "")), "chain.yaml: cam1.T_cn_cnm1: missing");
   SE3d scaled;
   std::string bad = matrixYaml("T_cn_cnm1", scaled);

@@ -15,23 +15,14 @@ namespace fs = std::filesystem;
 using voca::Dataset;
 using voca::DatasetLayout;
 
+using voca::test::expectError;
+using voca::test::writeText;
+
 std::string errorOf(const fs::path& path) {
-  try {
-    voca::openDataset(path);
-  } catch (const voca::InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return voca::test::inputErrorOf([&] { voca::openDataset(path); });
 }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// Checks that an error message contains the expected part, showing the whole message on failure.
-void expectError(const std::string& error, const std::string& part) {
-  INFO("message: " << error);
-  INFO("expected part: " << part);
-  CHECK(contains(error, part));
-}
 
 voca::GrayImage pattern(int seed) {
   voca::GrayImage image(16, 12);
@@ -51,11 +42,6 @@ void writeEuroc(const fs::path& root, int frames) {
   }
   writer.finish();
   CHECK(writer.frameCount() == frames);
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-  fs::create_directories(path.parent_path());
-  std::ofstream(path) << text;
 }
 
 }  // namespace
@@ -195,6 +181,9 @@ TEST_CASE("KITTI sequence folder with ground truth two levels up") {
 
   writeText(seq / "times.txt", "0.0\n0.1\nten\n");
   expectError(errorOf(seq), "times.txt:3: expected a time in seconds, got 'ten'");
+  // Beyond int64 nanoseconds: refused rather than converted with undefined behaviour.
+  writeText(seq / "times.txt", "0.0\n0.1\n1e300\n");
+  expectError(errorOf(seq), "times.txt:3: expected a time in seconds, got '1e300'");
   fs::remove_all(seq / "image_1");
   expectError(errorOf(seq), "image_1: missing");
 }

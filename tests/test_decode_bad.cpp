@@ -70,14 +70,7 @@ int readAll(const fs::path& path, std::vector<std::int64_t> t_ns = {}) {
   return n;
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const voca::InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using voca::test::inputErrorOf;
 
 void writeCsv(const fs::path& path, int rows) {
   std::ofstream csv(path);
@@ -103,7 +96,7 @@ TEST_CASE("truncated mp4 files are reported, naming the file") {
     CAPTURE(keep);
     const fs::path cut = dir / "cut.mp4";
     writeBytes(cut, bytes, static_cast<std::size_t>(keep * static_cast<double>(bytes.size())));
-    const std::string message = errorOf([&] { readAll(cut, timestamps(8)); });
+    const std::string message = inputErrorOf([&] { readAll(cut, timestamps(8)); });
     CHECK(message.find("cut.mp4") != std::string::npos);
   }
 }
@@ -146,7 +139,7 @@ TEST_CASE("a stream cut after some frames, without an index to tell, is reported
   writeRawH264(dir / "good.mp4", dir / "whole.h264", 8);
   writeRawH264(dir / "good.mp4", dir / "cut.h264", 5);
   CHECK(readAll(dir / "whole.h264", timestamps(8)) == 8);  // the conversion itself is sound
-  const std::string message = errorOf([&] { readAll(dir / "cut.h264", timestamps(8)); });
+  const std::string message = inputErrorOf([&] { readAll(dir / "cut.h264", timestamps(8)); });
   CHECK(message.find("cut.h264") != std::string::npos);
   CHECK(message.find("after 5 frames") != std::string::npos);
 }
@@ -165,7 +158,7 @@ TEST_CASE("random bytes, empty files, missing files and non-video files are repo
   }
   for (const char* name : {"noise.mp4", "empty.mp4", "notes.mp4", "absent.mp4"}) {
     CAPTURE(name);
-    const std::string message = errorOf([&] { readAll(dir / name); });
+    const std::string message = inputErrorOf([&] { readAll(dir / name); });
     CHECK(message.find(name) != std::string::npos);
   }
 }
@@ -178,9 +171,9 @@ TEST_CASE("a stereo dataset with a missing camera stream is reported") {
   writeCsv(dir / "mav0" / "cam0" / "data.csv", 6);
   writeCsv(dir / "mav0" / "cam1" / "data.csv", 6);
   // Through the dataset reader ...
-  CHECK(errorOf([&] { (void)voca::openDataset(dir.path()); }).find("cam1") != std::string::npos);
+  CHECK(inputErrorOf([&] { (void)voca::openDataset(dir.path()); }).find("cam1") != std::string::npos);
   // ... and with explicit files.
-  const std::string message = errorOf([&] {
+  const std::string message = inputErrorOf([&] {
     voca::decode::StereoVideoReader reader(dir / "mav0" / "cam0" / "data.mp4", dir / "mav0" / "cam1" / "data.mp4",
                                            timestamps(6));
   });
@@ -199,17 +192,18 @@ TEST_CASE("mismatched frame counts between cameras and data.csv are reported") {
   SUBCASE("cameras differ") {
     writeCsv(mav0 / "cam0" / "data.csv", 8);
     writeCsv(mav0 / "cam1" / "data.csv", 8);
-    const std::string message = errorOf([&] { voca::decode::StereoVideoReader reader(voca::openDataset(dir.path())); });
+    const std::string message =
+        inputErrorOf([&] { voca::decode::StereoVideoReader reader(voca::openDataset(dir.path())); });
     CHECK(message.find("cam1") != std::string::npos);
     CHECK(message.find("6 frames") != std::string::npos);
   }
   SUBCASE("csv lists fewer frames than the video has") {
-    const std::string message = errorOf([&] { readAll(mav0 / "cam0" / "data.mp4", timestamps(7)); });
+    const std::string message = inputErrorOf([&] { readAll(mav0 / "cam0" / "data.mp4", timestamps(7)); });
     CHECK(message.find("8 frames") != std::string::npos);
     CHECK(message.find("7 timestamps") != std::string::npos);
   }
   SUBCASE("csv lists more frames than the video has") {
-    const std::string message = errorOf([&] { readAll(mav0 / "cam1" / "data.mp4", timestamps(9)); });
+    const std::string message = inputErrorOf([&] { readAll(mav0 / "cam1" / "data.mp4", timestamps(9)); });
     CHECK(message.find("cam1") != std::string::npos);
     CHECK(message.find("9 timestamps") != std::string::npos);
   }
@@ -231,7 +225,7 @@ TEST_CASE("corrupt packets are reported with their index") {
   voca::decode::VideoDecoder decoder(demuxer.stream(), options, nullptr, "good.mp4");
   DecodedFrame frame;
   int decoded = 0;
-  const std::string message = errorOf([&] {
+  const std::string message = inputErrorOf([&] {
     for (const voca::decode::Packet& p : packets) {
       decoder.send(p);
       while (decoder.receive(frame)) ++decoded;

@@ -38,12 +38,7 @@ void writeWithLibpng(const std::filesystem::path& path, int width, int height, s
 }
 
 std::string errorOf(const std::filesystem::path& path) {
-  try {
-    voca::readPngGray(path);
-  } catch (const voca::InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return voca::test::inputErrorOf([&] { voca::readPngGray(path); });
 }
 
 }  // namespace

@@ -1,12 +1,16 @@
 #pragma once
-// Helpers shared by the test suites: the shared reference data and scratch folders.
+// Helpers shared by the test suites: the shared reference data, scratch folders, text files and
+// error messages.
 
 #include <doctest/doctest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <random>
 #include <string>
+
+#include "voca/core/error.h"
 
 namespace voca::test {
 
@@ -42,5 +46,32 @@ class ScratchDir {
  private:
   std::filesystem::path path_;
 };
+
+// Writes a text file, creating its folder; the test stops if the file cannot be written.
+inline void writeText(const std::filesystem::path& path, const std::string& text) {
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  REQUIRE_MESSAGE(out.good(), "cannot write " << path.string());
+}
+
+// The message of the voca::InputError that f() throws, or "(no error)" when it returns normally.
+template <typename F>
+std::string inputErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const voca::InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// Checks that an error message contains the expected part, showing the whole message on failure.
+inline void expectError(const std::string& error, const std::string& part) {
+  INFO("message: " << error);
+  INFO("expected part: " << part);
+  CHECK(error.find(part) != std::string::npos);
+}
 
 }  // namespace voca::test

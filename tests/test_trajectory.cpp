@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -31,10 +32,7 @@ Trajectory randomTrajectory(int n, uint32_t seed) {
   return trajectory;
 }
 
-void writeText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
+using voca::test::writeText;
 
 }  // namespace
 
@@ -147,6 +145,17 @@ TEST_CASE("interpolatePose: exact at samples, linear and slerp between, nullopt 
   CHECK((quarter->translation() - Eigen::Vector3d(0.5, 1.0, 1.5)).norm() < 1e-15);
   // Slerp of a rotation about one axis is the proportional angle about that axis.
   CHECK((quarter->so3().log() - Eigen::Vector3d(0, 0, 0.25)).norm() < 1e-14);
+}
+
+TEST_CASE("interpolatePose: timestamps spanning more than INT64_MAX ns interpolate without overflow") {
+  Trajectory trajectory;
+  const int64_t t0 = std::numeric_limits<int64_t>::min() + 1, t1 = std::numeric_limits<int64_t>::max();
+  trajectory.poses.push_back({t0, SE3d(voca::SO3d::identity(), Eigen::Vector3d(0, 0, 0))});
+  trajectory.poses.push_back({t1, SE3d(voca::SO3d::identity(), Eigen::Vector3d(2, 0, 0))});
+  const auto middle = voca::interpolatePose(trajectory, 0);
+  REQUIRE(middle.has_value());
+  // 0 is half-way to 1 ns (2^63 - 1 ns on either side): alpha = 0.5 to double precision.
+  CHECK(middle->translation().x() == doctest::Approx(1.0).epsilon(1e-15));
 }
 
 TEST_CASE("changeBodyFrame moves every pose by the same body-frame transform") {
