@@ -6,4 +6,5 @@
 set(CMAKE_SYSTEM_PROCESSOR aarch64)
 set(VOCA_CROSS_TRIPLET aarch64-linux-gnu)
 set(VOCA_CROSS_QEMU aarch64)
+set(VOCA_CROSS_LOADER /lib/ld-linux-aarch64.so.1)
 include(${CMAKE_CURRENT_LIST_DIR}/debian-multiarch.cmake)

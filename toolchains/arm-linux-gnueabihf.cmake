@@ -6,4 +6,5 @@
 set(CMAKE_SYSTEM_PROCESSOR armv7l)
 set(VOCA_CROSS_TRIPLET arm-linux-gnueabihf)
 set(VOCA_CROSS_QEMU arm)
+set(VOCA_CROSS_LOADER /lib/ld-linux-armhf.so.3)
 include(${CMAKE_CURRENT_LIST_DIR}/debian-multiarch.cmake)
