@@ -16,6 +16,7 @@
 #include <fmt/core.h>
 
 #include "drivers/decode/video_decoder.h"
+#include "tools/voca/bench_backend.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 
@@ -221,6 +222,8 @@ Runner configureDecodeBench(CLI::App& app) {
 const std::vector<BenchMode>& benchModes() {
   static const std::vector<BenchMode> modes = {
       {"decode", "Decoder throughput: full decode with/without MV export, MV-only parse", configureDecodeBench},
+      {"backend", "Estimator cost per frame on synthetic observations (7 keyframes, ~200 points)",
+       voca::cli::configureBackendBench},
   };
   return modes;
 }

@@ -1,0 +1,75 @@
+// Proves the backend's fixed-memory rule: after warm-up, process() never touches the heap, through
+// keyframes, marginalisation, outlier removal and a reset. This executable replaces the global
+// operator new/delete with counting versions.
+
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "voca/backend/estimator.h"
+#include "voca/backend/synthetic.h"
+#include "voca/synth/rigs.h"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, std::align_val_t align) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  const std::size_t a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+using namespace voca;
+
+TEST_CASE("backend: no heap allocation in process() after warm-up, including marginalisation and a reset") {
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.5;
+  sc.duration_s = 12.0;
+  sc.motion_scale = 2.0;  // more keyframes and marginalisations per second
+  SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  seq.frames[150].observations[1].clear();  // a frame that cannot be tracked: forces a reset
+  std::uint32_t state = 12345;              // scrambled left points (a decoder glitch)
+  for (KeypointObservation& o : seq.frames[150].observations[0]) {
+    state = state * 1664525u + 1013904223u;
+    const float x = 20.f + static_cast<float>(state % 700u);
+    state = state * 1664525u + 1013904223u;
+    o.px = Eigen::Vector2f(x, 20.f + static_cast<float>(state % 440u));
+  }
+
+  VoEstimator estimator({}, rig);
+  for (std::size_t k = 0; k < 20; ++k) estimator.process(seq.frames[k]);
+  const long before = g_allocations.load();
+  int keyframes = 0, resets = 0, tracked = 0;
+  for (std::size_t k = 20; k < seq.frames.size(); ++k) {
+    const PoseEstimate& e = estimator.process(seq.frames[k]);
+    keyframes += e.keyframe;
+    resets += e.state != TrackingState::kTracking;
+    tracked += e.state == TrackingState::kTracking;
+  }
+  const long allocations = g_allocations.load() - before;
+  MESSAGE((seq.frames.size() - 20) << " frames, " << keyframes << " keyframes, " << resets << " reset/lost frames");
+  CHECK(keyframes > 2 * estimator.config().max_keyframes);  // marginalisation ran many times
+  CHECK(resets >= 1);
+  CHECK(tracked > 150);
+  CHECK(allocations == 0);
+}
