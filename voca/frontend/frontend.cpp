@@ -216,7 +216,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       keep = true;
       keep_prior = true;
       result = prior_px;
-      ++ts.rescued;
+      ts.rescued += run_plain;  // the plain track was tried and failed
     }
     // The kept result's backward templates become the point's templates; everything else is freed.
     cam.release(forward_slot);

@@ -42,7 +42,7 @@ struct TemporalStats {
   int tracked_prior = 0;  // successful tracks started from the MV prior
   int kept = 0;
   int lost = 0;
-  int rescued = 0;  // kept only thanks to the prior (the plain track failed or was not run)
+  int rescued = 0;  // kept from the prior after the plain track was tried and failed
   int consensus_rejections = 0;
 };
 
