@@ -106,19 +106,30 @@ void KltFrontend::reset() {
   have_previous_ = false;
 }
 
-bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
-                               const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess,
-                               std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
+bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
+                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const {
   SE2f T_forward(0.f, p + flow_guess);
   if (trackPatch(forward, to, *pattern_, align_, T_forward) != AlignStatus::kConverged) return false;
-  const Eigen::Vector2f tracked = T_forward.translation();
+  tracked = T_forward.translation();
+  return true;
+}
+
+bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
+                                const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                                std::span<PatchTemplate> backward) const {
   // The backward track starts from the negated guess, so a correct prior lands it near p again.
   SE2f T_backward(0.f, tracked - flow_guess);
   buildPyramidPatch(to, tracked, *pattern_, backward);
   if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
-  if ((T_backward.translation() - p).squaredNorm() > static_cast<float>(config_.max_recovered_dist2_px2)) {
-    return false;
-  }
+  return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
+}
+
+bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
+                               const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess,
+                               std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
+  Eigen::Vector2f tracked;
+  if (!trackForward(forward, to, p, flow_guess, tracked)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, backward)) return false;
   result = tracked;
   return true;
 }
@@ -188,13 +199,25 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     const auto attempt = [&](const Eigen::Vector2f& guess, int backward_slot, Eigen::Vector2f& tracked) {
       return trackChecked(cam.slot(forward_slot), from, to, p, guess, cam.slot(backward_slot), tracked);
     };
-    if (mode == PriorMode::kMvThenOf && run_prior) {
-      prior_ok = attempt(mv, prior_slot, prior_px);
-      run_plain = !prior_ok;
+    if (mode == PriorMode::kMvParallelOf && run_prior) {
+      // Both forward tracks first. When they agree and the plain one passes its round trip, the
+      // point is kept from the plain track whatever the prior's round trip says, so that one is
+      // skipped; the outcome equals running both checks.
+      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, plain_px);
+      const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px);
+      const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
+      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, cam.slot(plain_slot));
+      prior_ok =
+          (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot)));
+    } else {
+      if (mode == PriorMode::kMvThenOf && run_prior) {
+        prior_ok = attempt(mv, prior_slot, prior_px);
+        run_plain = !prior_ok;
+      }
+      if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
+      if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
+      if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
     }
-    if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
-    if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
-    if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
 

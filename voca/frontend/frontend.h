@@ -133,6 +133,12 @@ class KltFrontend {
   bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                     const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, std::span<PatchTemplate> backward,
                     Eigen::Vector2f& result) const;
+  // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
+  bool trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
+                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const;
+  bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
+                     const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                     std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const FrontendInput& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   void detectAndMatch(const FrontendInput& input, FrontendStats& stats);
