@@ -80,6 +80,7 @@ VoEstimator::VoEstimator(const BackendConfig& config, const StereoRig& rig)
   landmarks_.resize(n);
   lin_.resize(n);
   free_landmarks_.reserve(n);
+  alive_.reserve(n);
   scratch_landmarks_.reserve(n);
   scratch_ids_.reserve(static_cast<std::size_t>(config_.max_observations_per_camera));
   for (Frame& f : frames_) {
@@ -94,6 +95,7 @@ void VoEstimator::reset() {
     for (auto& o : f.obs) o.clear();
   }
   free_landmarks_.clear();
+  alive_.clear();
   for (int i = config_.max_landmarks - 1; i >= 0; --i) {
     landmarks_[static_cast<std::size_t>(i)].alive = false;
     free_landmarks_.push_back(i);
@@ -187,13 +189,20 @@ void VoEstimator::removeLandmark(int index) {
   id_to_landmark_.erase(lm.id);
   lm.alive = false;
   lm.mask = 0;
+  // Swap-remove from the alive list; loops that remove while iterating run backwards, so the
+  // element moved into this position has been visited already.
+  const int last = alive_.back();
+  alive_[static_cast<std::size_t>(lm.alive_pos)] = last;
+  landmarks_[static_cast<std::size_t>(last)].alive_pos = lm.alive_pos;
+  alive_.pop_back();
   free_landmarks_.push_back(index);
   --num_landmarks_;
 }
 
 void VoEstimator::removeFrame(int frame) {
   const std::uint32_t bits = 3u << maskBit(frame, 0);
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     if (lm.host == frame) {
@@ -327,6 +336,8 @@ int VoEstimator::triangulateNew(int frame) {
     if (numObs(lm) < 2) continue;
     if (!id_to_landmark_.insert(lm.id, index)) break;
     lm.alive = true;
+    lm.alive_pos = static_cast<int>(alive_.size());
+    alive_.push_back(index);
     free_landmarks_.pop_back();
     ++num_landmarks_;
     ++created;
@@ -342,7 +353,8 @@ void VoEstimator::optimizePose(int frame) {
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int count = 0;
-    for (int i = 0; i < config_.max_landmarks; ++i) {
+    for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+      const int i = alive_[static_cast<std::size_t>(k)];
       const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
       if (!lm.alive || (lm.mask & bits) == 0) continue;
       for (int c = 0; c < 2; ++c) {
@@ -370,7 +382,8 @@ void VoEstimator::optimizePose(int frame) {
 int VoEstimator::removeFrameOutliers(int frame, double threshold_px) {
   int removed = 0;
   const std::uint32_t bits = 3u << maskBit(frame, 0);
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive || (lm.mask & bits) == 0 || lm.host == frame) continue;
     for (int c = 0; c < 2; ++c) {
@@ -421,7 +434,8 @@ double VoEstimator::cost() const {
   const double invalid_e = 10.0 * config_.outlier_threshold_px;
   const auto huber = [&](double e) { return e <= huber_px_ ? 0.5 * e * e : huber_px_ * (e - 0.5 * huber_px_); };
   double total = 0.0;
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
@@ -437,9 +451,8 @@ double VoEstimator::cost() const {
 void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks) {
   H.setZero();
   b.setZero();
-  const int count = only_landmarks != nullptr ? static_cast<int>(only_landmarks->size()) : config_.max_landmarks;
-  for (int k = 0; k < count; ++k) {
-    const int i = only_landmarks != nullptr ? (*only_landmarks)[static_cast<std::size_t>(k)] : k;
+  const std::vector<int>& list = only_landmarks != nullptr ? *only_landmarks : alive_;
+  for (const int i : list) {
     const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
     L.valid = false;
@@ -487,7 +500,8 @@ void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landm
 
 void VoEstimator::backup() {
   for (Frame& f : frames_) f.T_w_c_backup = f.T_w_c;
-  for (Landmark& lm : landmarks_) {
+  for (const int i : alive_) {
+    Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     lm.s_backup = lm.s;
     lm.rho_backup = lm.rho;
@@ -496,7 +510,8 @@ void VoEstimator::backup() {
 
 void VoEstimator::restore() {
   for (Frame& f : frames_) f.T_w_c = f.T_w_c_backup;
-  for (Landmark& lm : landmarks_) {
+  for (const int i : alive_) {
+    Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     lm.s = lm.s_backup;
     lm.rho = lm.rho_backup;
@@ -508,7 +523,8 @@ void VoEstimator::applyIncrement(const VecH& dx) {
     if (frames_[static_cast<std::size_t>(f)].active)
       applyPoseIncrement(frames_[static_cast<std::size_t>(f)].T_w_c, dx.segment<6>(6 * f));
   }
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     const LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
     if (!lm.alive || !L.valid) continue;
@@ -542,11 +558,12 @@ int VoEstimator::optimize(int max_iterations, bool filter) {
       H_reduced_ = H_;
       b_reduced_ = b_;
       for (int k = 0; k < kDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
-      for (int i = 0; i < config_.max_landmarks; ++i) {
+      for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+        const int i = alive_[static_cast<std::size_t>(k)];
         LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
         if (!landmarks_[static_cast<std::size_t>(i)].alive || !L.valid) continue;
         Eigen::Matrix3d H_ll = L.H_ll;
-        for (int k = 0; k < 3; ++k) H_ll(k, k) += lambda * std::max(L.H_ll(k, k), 1e-6) + kTinyRegularization;
+        for (int d = 0; d < 3; ++d) H_ll(d, d) += lambda * std::max(L.H_ll(d, d), 1e-6) + kTinyRegularization;
         L.H_ll_inv = H_ll.inverse();
         if (!L.H_ll_inv.allFinite()) {
           L.valid = false;
@@ -604,7 +621,8 @@ int VoEstimator::optimize(int max_iterations, bool filter) {
 }
 
 void VoEstimator::filterOutliers() {
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     if (!(lm.rho > 0.0 && lm.rho <= 2.0 * config_.max_inverse_distance) || !lm.s.allFinite()) {
@@ -639,7 +657,8 @@ int VoEstimator::chooseKeyframeToMarginalize(int newest) const {
   }
   std::array<int, kMaxWindowFrames> hosted{}, connected{};
   const std::uint32_t newest_bits = 3u << maskBit(newest, 0);
-  for (const Landmark& lm : landmarks_) {
+  for (const int i : alive_) {
+    const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive) continue;
     ++hosted[static_cast<std::size_t>(lm.host)];
     if ((lm.mask & newest_bits) != 0) ++connected[static_cast<std::size_t>(lm.host)];
@@ -689,7 +708,8 @@ void VoEstimator::prepareMarginalization(int frame) {
   }
   const std::uint32_t newest_bits = 3u << maskBit(newest, 0);
   scratch_landmarks_.clear();
-  for (int i = 0; i < config_.max_landmarks; ++i) {
+  for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
+    const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive || lm.host != frame) continue;
     if (newest == frame || (lm.mask & newest_bits) == 0) {
@@ -722,7 +742,8 @@ void VoEstimator::prepareMarginalization(int frame) {
   }
   // Views in this frame of the landmarks that stay cannot go into a pose-only prior: dropped.
   const std::uint32_t bits = 3u << maskBit(frame, 0);
-  for (Landmark& lm : landmarks_) {
+  for (const int i : alive_) {
+    Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (lm.alive && lm.host != frame) lm.mask &= ~bits;
   }
 }
@@ -804,7 +825,8 @@ void VoEstimator::frameStats(int frame, PoseEstimate& out) const {
   double sum_sq = 0.0, depth = 0.0;
   int inliers = 0, depth_count = 0;
   const std::uint32_t bits = 3u << maskBit(frame, 0);
-  for (const Landmark& lm : landmarks_) {
+  for (const int i : alive_) {
+    const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     if (!lm.alive || (lm.mask & bits) == 0) continue;
     for (int c = 0; c < 2; ++c) {
       if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
@@ -875,7 +897,8 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   const auto countInliers = [&] {
     int count = 0;
     const std::uint32_t bits = 3u << maskBit(n, 0);
-    for (const Landmark& lm : landmarks_) {
+    for (const int i : alive_) {
+      const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
       if (lm.alive) count += std::popcount(lm.mask & bits);
     }
     return count;

@@ -116,6 +116,7 @@ class VoEstimator {
   };
   struct Landmark {
     bool alive = false;
+    int alive_pos = -1;  // index in alive_
     std::uint64_t id = 0;
     int host = -1;
     Eigen::Vector2d s = Eigen::Vector2d::Zero();
@@ -179,6 +180,7 @@ class VoEstimator {
   std::vector<Landmark> landmarks_;
   std::vector<LandmarkLin> lin_;
   std::vector<int> free_landmarks_;
+  std::vector<int> alive_;  // indices of the alive landmarks, so loops never scan the whole pool
   std::vector<int> scratch_landmarks_;
   std::vector<std::uint64_t> scratch_ids_;
   IdSlotMap id_to_landmark_;
