@@ -201,6 +201,7 @@ TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) bel
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
   sc.seed = 5;
+  sc.duration_s = 15.0;  // 300 frames: enough for many marginalisations, quick under emulation
   const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
   const RunResult result = run(rig, seq, {}, true);
   CHECK(result.resets == 0);
