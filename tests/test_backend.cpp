@@ -310,3 +310,24 @@ TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory 
   const RteResult rte = relativeTrajectoryError(est, gt, 6.0, DeltaUnit::kFrames);
   CHECK(rte.stats.rmse < 0.005);
 }
+
+TEST_CASE("backend: TUM-VI fisheye rig (kb4) with the shipped Gauss-Newton setting") {
+  const StereoRig rig = synth::tumviRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.5;
+  sc.duration_s = 10.0;
+  sc.seed = 3;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  BackendConfig config;
+  config.use_lm = false;  // configs/tumvi_vo.json, as the official TUM-VI file
+  config.lm_lambda_initial = 1e-7;
+  const RunResult result = run(rig, seq, config);
+  CHECK(result.resets == 0);
+  CHECK(result.lost == 0);
+  const RteResult rte = relativeTrajectoryError(result.T_world_body, seq.T_world_body, 6.0, DeltaUnit::kFrames);
+  MESSAGE("TUM-VI rig, Gauss-Newton, 0.5 px noise: RTE " << rte.stats.rmse * 100 << " cm");
+  // TUM-VI's focal length is 190 px against EuRoC's 458 px, so 0.5 px is a 2.4x larger angle; the
+  // EuRoC bound of 0.5 cm scaled by that would be 1.2 cm. Measured 0.44 cm (LM gives the same);
+  // 0.8 cm still catches a broken fisheye path (Jacobians, unprojection), which gives centimetres.
+  CHECK(rte.stats.rmse < 0.008);
+}
