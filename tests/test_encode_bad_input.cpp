@@ -5,6 +5,7 @@
 #include "drivers/dataset/dataset.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
 #include "voca/image/png_io.h"
@@ -48,7 +49,7 @@ TEST_CASE("bad bitrate strings are InputErrors naming the text") {
 TEST_CASE("frames of different sizes stop the encode and leave no file") {
   test::ScratchDir dir("encode-bad-sizes");
   const auto path = dir / "v.mp4";
-  EncoderSettings settings;
+  EncoderSettings settings = test::testSettings();
   const std::string message = inputErrorOf([&] {
     encodeVideoFile(path, settings, framesOfSizes({{64, 48}, {64, 48}, {80, 48}}));
   });
@@ -59,7 +60,7 @@ TEST_CASE("frames of different sizes stop the encode and leave no file") {
 
 TEST_CASE("encoder settings and outputs that cannot work are InputErrors") {
   test::ScratchDir dir("encode-bad-settings");
-  EncoderSettings settings;
+  EncoderSettings settings = test::testSettings();
   settings.two_pass = false;
   const FrameSource three = framesOfSizes({{64, 48}, {64, 48}, {64, 48}});
 
@@ -92,6 +93,7 @@ TEST_CASE("encoder settings and outputs that cannot work are InputErrors") {
 TEST_CASE("dataset problems are InputErrors naming the folder") {
   test::ScratchDir dir("encode-bad-dataset");
   DatasetEncodeOptions options;
+  options.settings = test::testSettings();
   options.settings.two_pass = false;
 
   const auto missing = dir / "no-such-dataset";

@@ -26,14 +26,13 @@ std::vector<std::int64_t> makeTimestamps(int n) {
 }
 
 void writeSyntheticEuroc(const std::filesystem::path& root, const std::vector<std::int64_t>& t, int w, int h) {
-  const test::NoiseTexture texture(3);
+  const int n = static_cast<int>(t.size());
+  const std::vector<GrayImage> left = test::makePanningSequence(w, h, n, 0.5, 0.25, 3);
+  const std::vector<GrayImage> right = test::makePanningSequence(w, h, n, 0.5, 0.25, 4);
   EurocWriter writer(root);
-  GrayImage left(w, h), right(w, h);
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    test::renderShiftedFrame(texture, static_cast<int>(i), 0.5, 0.25, left);
-    test::renderShiftedFrame(texture, static_cast<int>(i) + 40, 0.5, 0.25, right);  // another view of the scene
-    const GrayView views[2] = {left.view(), right.view()};
-    writer.addFrame(t[i], views);
+  for (int i = 0; i < n; ++i) {
+    const GrayView views[2] = {left[static_cast<std::size_t>(i)].view(), right[static_cast<std::size_t>(i)].view()};
+    writer.addFrame(t[static_cast<std::size_t>(i)], views);
   }
   writer.finish();
 }
@@ -58,6 +57,7 @@ TEST_CASE("encodeDataset writes the VOCA video layout with the original timestam
   writeSyntheticEuroc(dir / "raw", t, 192, 144);
 
   DatasetEncodeOptions options;
+  options.settings = test::testSettings();
   options.settings.bitrate_bps = 200000;
   std::vector<int> last_frame(2, -1);
   const DatasetEncodeReport report =
@@ -101,6 +101,7 @@ TEST_CASE("encodeDataset writes the VOCA video layout with the original timestam
 
   // Re-encoding a VOCA video folder at another bitrate and the dataset's own rate (20 Hz).
   DatasetEncodeOptions again;
+  again.settings = test::testSettings();
   again.settings.bitrate_bps = 100000;
   again.use_dataset_fps = true;
   again.cameras = {1};

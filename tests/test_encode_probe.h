@@ -14,6 +14,7 @@ extern "C" {
 #include <libavformat/avformat.h>
 }
 
+#include "drivers/encode/video_encoder.h"
 #include "voca/core/image.h"
 
 namespace voca::test {
@@ -57,14 +58,44 @@ class NoiseTexture {
   std::vector<float> lattice_;
 };
 
-// Frame i of a camera panning over the texture at (vx, vy) pixels per frame (sub-pixel steps).
-inline void renderShiftedFrame(const NoiseTexture& texture, int index, double vx, double vy, GrayImage& out) {
-  for (int y = 0; y < out.height(); ++y) {
-    for (int x = 0; x < out.width(); ++x) {
-      const float v = texture(x + index * vx, y + index * vy);
-      out(x, y) = static_cast<std::uint8_t>(std::lround(std::fmin(255.0f, std::fmax(0.0f, v))));
+// A camera panning over a noise texture at (vx, vy) pixels per frame (sub-pixel steps). The
+// texture is rendered once and every frame samples it bilinearly at its offset, which is an exact
+// translation of the bilinear surface and cheap enough for tests under emulation.
+inline std::vector<GrayImage> makePanningSequence(int width, int height, int num_frames, double vx, double vy,
+                                                  std::uint32_t seed) {
+  const NoiseTexture texture(seed);
+  const double span_x = std::fabs(vx) * (num_frames - 1), span_y = std::fabs(vy) * (num_frames - 1);
+  const int tex_w = width + static_cast<int>(std::ceil(span_x)) + 2;
+  const int tex_h = height + static_cast<int>(std::ceil(span_y)) + 2;
+  std::vector<float> tex(static_cast<std::size_t>(tex_w) * tex_h);
+  for (int y = 0; y < tex_h; ++y)
+    for (int x = 0; x < tex_w; ++x) tex[static_cast<std::size_t>(y) * tex_w + x] = texture(x, y);
+  // Start where the whole path stays inside the texture, whatever the signs of vx, vy.
+  const double start_x = vx < 0 ? span_x : 0.0, start_y = vy < 0 ? span_y : 0.0;
+  std::vector<GrayImage> frames;
+  for (int i = 0; i < num_frames; ++i) {
+    const double ox = start_x + i * vx, oy = start_y + i * vy;
+    const int ix = static_cast<int>(std::floor(ox)), iy = static_cast<int>(std::floor(oy));
+    const float ax = static_cast<float>(ox - ix), ay = static_cast<float>(oy - iy);
+    GrayImage& frame = frames.emplace_back(width, height);
+    for (int y = 0; y < height; ++y) {
+      const float* r0 = &tex[static_cast<std::size_t>(y + iy) * tex_w + ix];
+      const float* r1 = r0 + tex_w;
+      for (int x = 0; x < width; ++x) {
+        const float v = (1 - ay) * ((1 - ax) * r0[x] + ax * r0[x + 1]) + ay * ((1 - ax) * r1[x] + ax * r1[x + 1]);
+        frame(x, y) = static_cast<std::uint8_t>(std::lround(std::fmin(255.0f, std::fmax(0.0f, v))));
+      }
     }
   }
+  return frames;
+}
+
+// The default (paper) settings on one thread: x264's output is then deterministic, and its frame
+// threads stall under qemu-user, where the cross-built unit tests run.
+inline encode::EncoderSettings testSettings() {
+  encode::EncoderSettings settings;
+  settings.threads = 1;
+  return settings;
 }
 
 // What the file holds, as read back independently of the encoder.
