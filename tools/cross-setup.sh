@@ -65,7 +65,18 @@ if [ ${#missing[@]} -gt 0 ]; then
     echo "cross-setup: adding dpkg architecture $arch"
     as_root dpkg --add-architecture "$arch"
   fi
-  as_root apt-get update -qq
+  # A mirror caught mid-sync fails the update for one index ("File has unexpected size") and
+  # usually passes a bit later. If it keeps failing, go on with the lists apt has: the install
+  # below fails clearly if what we need is not in them.
+  for try in 1 2 3; do
+    as_root apt-get update -qq && break
+    if [ "$try" -lt 3 ]; then
+      echo "cross-setup: apt-get update failed, retrying in 20 s" >&2
+      sleep 20
+    else
+      echo "cross-setup: apt-get update failed 3 times; using the package lists apt already has" >&2
+    fi
+  done
   # Dry run first: a version skew between the native and ARM -dev packages, or a package that is
   # not Multi-Arch: same, shows up as a removal. Upgrades of native packages to the ARM ones'
   # version are expected (Multi-Arch: same needs identical versions) and are allowed.

@@ -11,3 +11,16 @@ if grep -rqs "LABELS asan" tests/*.cmake; then
   cmake --build --preset asan --target ${asan_targets}
   ctest --preset asan
 fi
+
+# Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot
+# rot unnoticed. Runs in CI (CI=true) or with VOCA_CROSS=1; VOCA_CROSS=0 skips it. Builds only the
+# voca tool and the unit-test executables (test names are their target names), not the e2e tests.
+if [ "${VOCA_CROSS:-$([ "${CI:-}" = true ] && echo 1 || echo 0)}" = 1 ]; then
+  cross_start=$SECONDS
+  bash tools/cross-setup.sh aarch64
+  cmake --preset aarch64
+  cross_targets=$(ctest --preset aarch64 -N | sed -n 's/^ *Test *#[0-9]*: *//p')
+  cmake --build --preset aarch64 --target voca ${cross_targets}
+  ctest --preset aarch64
+  echo "cross: aarch64 setup, build and emulated unit tests took $((SECONDS - cross_start)) s"
+fi
