@@ -90,8 +90,8 @@ inline std::vector<GrayImage> makePanningSequence(int width, int height, int num
   return frames;
 }
 
-// The default (paper) settings on one thread: x264's output is then deterministic, and its frame
-// threads stall under qemu-user, where the cross-built unit tests run.
+// The default (paper) settings, pinned to one thread as the tests rely on it: x264's output is then
+// deterministic, and its frame threads stall under qemu-user, where the cross-built unit tests run.
 inline encode::EncoderSettings testSettings() {
   encode::EncoderSettings settings;
   settings.threads = 1;

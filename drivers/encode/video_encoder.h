@@ -32,7 +32,10 @@ struct EncoderSettings {
   std::string x264_preset = "medium";  // the ffmpeg CLI default, which the paper used
   std::string x264_tune;               // e.g. "zerolatency" for live capture; empty = none
   int gop_size = 600;  // mpeg4 / mpeg2video: max frames between keyframes (libx264 takes keyint from x264_params)
-  int threads = 0;     // 0 = the codec's automatic choice
+  // Encoder threads; 0 = the codec's automatic choice. One by default: x264's output then does not
+  // depend on the machine's core count (reproducible videos), and x264's frame threads stall under
+  // qemu-user emulation, where cross-built tests run.
+  int threads = 1;
   bool global_header = false;  // codec headers out of band (extradata) as .mp4 needs; in band for raw streams
 };
 

@@ -25,6 +25,7 @@ struct EncodeOptions {
   std::string codec = "libx264";
   std::string calib;
   bool single_pass = false;
+  int threads = 1;
 };
 
 // "0,1" -> {0, 1}.
@@ -72,6 +73,8 @@ int runEncode(const EncodeOptions& cli) {
   options.settings.codec = cli.codec;
   options.settings.bitrate_bps = parseBitrate(cli.bitrate);
   options.settings.two_pass = !cli.single_pass;
+  if (cli.threads < 0) throw voca::InputError(fmt::format("--threads {}: expected 0 (automatic) or more", cli.threads));
+  options.settings.threads = cli.threads;
   parseFps(cli.fps, options);
   options.cameras = parseCameras(cli.cameras);
   if (!cli.calib.empty()) options.calibration = cli.calib;
@@ -156,6 +159,9 @@ const bool registered = voca::cli::registerCommand(
                       "Calibration to write as <out>/calib.json (Basalt .json, Kalibr .yaml, KITTI calib.txt); "
                       "default: the one found with the dataset");
        app.add_flag("--single-pass", options->single_pass, "One-pass rate control (faster, less exact bitrate)");
+       app.add_option("--threads", options->threads,
+                      "Encoder threads; 0 = automatic (faster, but x264's output then depends on the core count)")
+           ->capture_default_str();
        return [options] { return runEncode(*options); };
      }});
 
