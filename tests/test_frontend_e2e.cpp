@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -62,12 +63,16 @@ struct SynthWorld {
     return c == 0 ? T_world_cam0[static_cast<std::size_t>(k)] : T_world_cam0[static_cast<std::size_t>(k)] * T_cam0_cam1;
   }
 
+  // Lens blur of the renderer (see synth::RenderSettings::psf_sigma_px); 0 renders like before it existed.
+  float psf_sigma_px = 0.0f;
+
   void render(int k, int c, GrayImage& out) const {
     const synth::RayTable& table = rays[static_cast<std::size_t>(c)];
     out.resize(table.width(), table.height());
     synth::RenderSettings settings;
     settings.frame_index = static_cast<std::uint64_t>(k);
     settings.camera_index = c;
+    settings.psf_sigma_px = psf_sigma_px;
     synth::renderRows(scene, table, pose(k, c), settings, out.view(), 0, table.height());
   }
 
@@ -172,13 +177,18 @@ void encodeRoundTrip(const std::vector<const GrayImage*>& images, const std::fil
 
 TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray-cast ground truth") {
   const int num_frames = 8;
-  const SynthWorld world(synth::MotionPreset::kGentle, 20.0, num_frames, 3.0);
+  SynthWorld world(synth::MotionPreset::kGentle, 20.0, num_frames, 3.0);
+  // A real lens leaves little contrast at Nyquist; sigma 0.6 px is the middle of the usual range.
+  world.psf_sigma_px = 0.6f;
   std::vector<Frame> frames(num_frames);
+  const std::clock_t render_start = std::clock();
   for (int k = 0; k < num_frames; ++k) {
     world.render(k, 0, frames[static_cast<std::size_t>(k)].left);
     world.render(k, 1, frames[static_cast<std::size_t>(k)].right);
     frames[static_cast<std::size_t>(k)].t_ns = k * 50'000'000LL;
   }
+  MESSAGE("render CPU time per stereo pair: "
+          << 1e3 * static_cast<double>(std::clock() - render_start) / CLOCKS_PER_SEC / num_frames << " ms");
   FrontendConfig config;
   config.prior_mode = PriorMode::kNone;
   const RunResult run = runFrontend(config, world.rig, frames);
@@ -186,14 +196,14 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
   MESSAGE("synthetic gentle: " << errors.size() << " observations, median " << quantile(errors, 0.5) << " px, p90 "
                                << quantile(errors, 0.9) << " px");
   REQUIRE(errors.size() > 300);
-  // The issue asks for median < 0.05 px and p90 < 0.1 px. On this renderer the SE(2) patch model
-  // measures median ~0.19 px, p90 ~0.5 px (with or without sensor noise, with 5 or 20 iterations);
-  // on smooth band-limited textures the same tracker stays below 0.03 px (test_frontend). Most of
-  // the gap is bilinear-interpolation bias on pixel-scale texture detail: smoothing level 0 with a
-  // 3x3 binomial brings the median to ~0.06 px (not adopted yet, see the report). The bounds below
-  // guard the current accuracy against regressions (errors include drift over up to 7 frames).
-  CHECK(quantile(errors, 0.5) < 0.3);
-  CHECK(quantile(errors, 0.9) < 0.8);
+  // The issue asks for median < 0.05 px and p90 < 0.1 px; this scene does not meet it yet. The
+  // ground truth checks out (no signed bias: mean error (-0.016, 0.010) px; ray table reprojects to
+  // 3e-5 px; one-frame errors as large as 7-frame ones, so no drift). The error is image content:
+  // without lens blur median 0.21 / p90 0.48 px; with the 0.6 px PSF 0.125 / 0.31 px; noise-free
+  // 0.096 / 0.24 px (PSF 0.6) and 0.042 / 0.12 px (PSF 1.0). The bounds below are the measured
+  // values (deterministic rendering) plus ~30 % margin, guarding against regressions.
+  CHECK(quantile(errors, 0.5) < 0.17);
+  CHECK(quantile(errors, 0.9) < 0.4);
 }
 
 TEST_CASE("e2e frontend: large motion through 500 kbit/s H.264: none loses most, mv_parallel_of keeps most") {

@@ -154,6 +154,17 @@ TEST_CASE("rendering is deterministic, independent of the row split, and seeded 
   }
   CHECK(std::equal(whole.data(), whole.data() + whole.pixelCount(), split.data()));
 
+  // The lens PSF reads neighbouring rows; a split must still not change a byte, and it must blur.
+  RenderSettings blurred = settings;
+  blurred.psf_sigma_px = 0.6f;
+  voca::GrayImage blur_whole(cam.width, cam.height, 0), blur_split(cam.width, cam.height, 0);
+  renderRows(scene, rays, T_world_cam, blurred, blur_whole.view(), 0, cam.height);
+  for (int y0 = 0; y0 < cam.height; y0 += 5) {
+    renderRows(scene, rays, T_world_cam, blurred, blur_split.view(), y0, std::min(y0 + 5, cam.height));
+  }
+  CHECK(std::equal(blur_whole.data(), blur_whole.data() + blur_whole.pixelCount(), blur_split.data()));
+  CHECK(!std::equal(whole.data(), whole.data() + whole.pixelCount(), blur_whole.data()));
+
   settings.noise_seed = 6;
   renderRows(scene, rays, T_world_cam, settings, other.view(), 0, cam.height);
   double abs_diff = 0.0;

@@ -91,9 +91,25 @@ void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_ca
   const int height = rays.height();
   const CameraPose pose{T_world_cam.rotationMatrix().cast<float>(), T_world_cam.translation().cast<float>()};
 
-  // Centre samples for the requested rows and one row either side (needed for edge detection).
-  const int row0 = std::max(y_begin - 1, 0);
-  const int row1 = std::min(y_end + 1, height);
+  // Lens PSF: a sampled, normalised Gaussian truncated at 3 sigma (radius 0 disables it).
+  const float sigma = std::max(settings.psf_sigma_px, 0.0f);
+  const int radius = sigma > 0.0f ? static_cast<int>(std::ceil(3.0f * sigma)) : 0;
+  std::vector<float> kernel(static_cast<std::size_t>(2 * radius + 1), 1.0f);
+  if (radius > 0) {
+    float total = 0.0f;
+    for (int d = -radius; d <= radius; ++d) {
+      kernel[static_cast<std::size_t>(d + radius)] = std::exp(-0.5f * static_cast<float>(d * d) / (sigma * sigma));
+      total += kernel[static_cast<std::size_t>(d + radius)];
+    }
+    for (float& w : kernel) w /= total;
+  }
+
+  // Irradiance is needed `radius` rows either side of the output (the PSF's support), and centre
+  // samples one row further (edge detection looks at the 4-neighbours).
+  const int irr0 = std::max(y_begin - radius, 0);
+  const int irr1 = std::min(y_end + radius, height);
+  const int row0 = std::max(irr0 - 1, 0);
+  const int row1 = std::min(irr1 + 1, height);
   const std::size_t rows = static_cast<std::size_t>(std::max(row1 - row0, 0));
   std::vector<float> value(rows * width, 0.0f);
   std::vector<int> surface(rows * width, -1);
@@ -108,16 +124,16 @@ void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_ca
     }
   }
 
+  // Pixel irradiance: the centre sample, or n x n stratified samples where an edge may cross the pixel.
   const int n = std::max(settings.supersample, 1);
   const float inv_n = 1.0f / static_cast<float>(n);
-  const std::uint64_t image_key =
-      hash64(settings.noise_seed ^ hash64(settings.frame_index * 8u +
-                                          static_cast<std::uint64_t>(settings.camera_index) + 0x243f6a8885a308d3ull));
-  for (int y = y_begin; y < y_end; ++y) {
+  std::vector<float> irradiance(static_cast<std::size_t>(std::max(irr1 - irr0, 0)) * width, 0.0f);
+  for (int y = irr0; y < irr1; ++y) {
     const std::size_t base = static_cast<std::size_t>(y - row0) * width;
-    std::uint8_t* out_row = out.row(y);
+    float* irr_row = irradiance.data() + static_cast<std::size_t>(y - irr0) * width;
     for (int x = 0; x < width; ++x) {
       const int id = surface[base + x];
+      if (id == -2) continue;
       float v = value[base + x];
       // A different surface in a 4-neighbour means an edge may cross this pixel: integrate it.
       bool edge = false;
@@ -125,7 +141,7 @@ void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_ca
       if (x + 1 < width && surface[base + x + 1] != id) edge = true;
       if (y > 0 && surface[base + x - width] != id) edge = true;
       if (y + 1 < height && surface[base + x + width] != id) edge = true;
-      if (edge && n > 1 && id != -2) {
+      if (edge && n > 1) {
         const float angle = rays.pixelAngle(x, y) * inv_n;
         float sum = 0.0f;
         for (int sy = 0; sy < n; ++sy) {
@@ -137,7 +153,36 @@ void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_ca
         }
         v = sum * inv_n * inv_n;
       }
-      if (id == -2) v = 0.0f;
+      irr_row[x] = v;
+    }
+  }
+
+  // Separable PSF, border pixels replicated: every output still depends only on its coordinates.
+  std::vector<float> blurred_x(irradiance.size(), 0.0f);
+  for (int y = irr0; y < irr1; ++y) {
+    const float* in = irradiance.data() + static_cast<std::size_t>(y - irr0) * width;
+    float* bx = blurred_x.data() + static_cast<std::size_t>(y - irr0) * width;
+    for (int x = 0; x < width; ++x) {
+      float sum = 0.0f;
+      for (int d = -radius; d <= radius; ++d) {
+        sum += kernel[static_cast<std::size_t>(d + radius)] * in[std::clamp(x + d, 0, width - 1)];
+      }
+      bx[x] = sum;
+    }
+  }
+
+  const std::uint64_t image_key =
+      hash64(settings.noise_seed ^ hash64(settings.frame_index * 8u +
+                                          static_cast<std::uint64_t>(settings.camera_index) + 0x243f6a8885a308d3ull));
+  for (int y = y_begin; y < y_end; ++y) {
+    std::uint8_t* out_row = out.row(y);
+    for (int x = 0; x < width; ++x) {
+      float v = 0.0f;
+      for (int d = -radius; d <= radius; ++d) {
+        const int yy = std::clamp(y + d, 0, height - 1);
+        v += kernel[static_cast<std::size_t>(d + radius)] * blurred_x[static_cast<std::size_t>(yy - irr0) * width + x];
+      }
+      if (!rays.valid(x, y)) v = 0.0f;
       if (settings.noise_sigma > 0.0f) {
         // Counter-based Gaussian (Box-Muller on a per-pixel hash): independent of the row split.
         const std::uint64_t h = hash64(image_key + static_cast<std::uint64_t>(y) * width + x);

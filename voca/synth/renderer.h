@@ -1,7 +1,7 @@
 #pragma once
 // Ray-casting renderer: per-pixel camera rays (computed once through any camera model), one
 // footprint-filtered sample per pixel plus stratified supersampling where a silhouette or crease
-// crosses the pixel, seeded Gaussian sensor noise, 8-bit gray output.
+// crosses the pixel, a Gaussian lens PSF, seeded Gaussian sensor noise, 8-bit gray output.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -50,6 +50,11 @@ struct RenderSettings {
   std::uint64_t frame_index = 0;  // with camera_index, selects the noise field of this image
   int camera_index = 0;
   int supersample = 3;  // n x n stratified samples in pixels crossed by an edge
+  // Optical blur (lens PSF), Gaussian sigma in pixels, applied to the pixel irradiance before noise.
+  // Real optics leave almost no contrast at Nyquist; without it pixel-scale texture detail and
+  // box-filtered edges reach the sampling limit, where any sub-pixel interpolation (KLT's bilinear
+  // one included) is biased. 0 (the default for now) keeps renders byte-identical to before.
+  float psf_sigma_px = 0.0f;
 };
 
 // Renders rows [y_begin, y_end) of a camera at pose T_world_cam into out (same size as the ray
