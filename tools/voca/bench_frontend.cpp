@@ -224,7 +224,7 @@ Runner configureFrontendBench(CLI::App& app) {
   auto opts = std::make_shared<FrontendBenchOptions>();
   app.add_option("input", opts->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
   app.add_option("--calib", opts->calib, "Calibration file (default: the one found with the dataset)");
-  app.add_option("--config", opts->config, "Config JSON (default: the paper's EuRoC frontend values)");
+  app.add_option("--config", opts->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
   app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first to get motion vectors")
       ->capture_default_str();
   app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();

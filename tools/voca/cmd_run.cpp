@@ -57,7 +57,7 @@ const bool registered = voca::cli::registerCommand({
       auto o = std::make_shared<RunOptions>();
       app.add_option("input", o->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
       app.add_option("--calib", o->calib, "Calibration file (default: the one found with the dataset)");
-      app.add_option("--config", o->config, "Config JSON, e.g. configs/euroc_vo.json (default: paper EuRoC values)");
+      app.add_option("--config", o->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for KITTI folders)");
       app.add_option("--mode", o->mode,
                      "Prior mode: none, mv, of_then_mv, mv_then_of, mv_parallel_of (overrides the config)");
       app.add_option("--encode", o->encode,

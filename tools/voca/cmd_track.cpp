@@ -248,7 +248,7 @@ const bool registered = voca::cli::registerCommand({
       auto opts = std::make_shared<TrackOptions>();
       app.add_option("input", opts->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
       app.add_option("--calib", opts->calib, "Calibration file (default: the one found with the dataset)");
-      app.add_option("--config", opts->config, "Config JSON, e.g. configs/euroc_vo.json (default: paper EuRoC values)");
+      app.add_option("--config", opts->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
       app.add_option("--mode", opts->mode,
                      "Prior mode: none, mv, of_then_mv, mv_then_of, mv_parallel_of (overrides the config)");
       app.add_option("--overlay", opts->overlay, "Write the left video with the tracks drawn to this .mp4");

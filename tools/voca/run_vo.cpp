@@ -96,11 +96,16 @@ double quantileOf(std::vector<double> values, double q) {
 double medianOf(std::vector<double> values) { return quantileOf(std::move(values), 0.5); }
 
 VoRunResult runVisualOdometry(const VoRunOptions& options) {
-  VocaConfig config = options.config ? loadConfig(*options.config) : VocaConfig{};
-  if (options.mode) config.frontend.prior_mode = *options.mode;
-
   const Dataset raw = openDataset(options.input);
   for (const std::string& warning : raw.warnings) fmt::print(stderr, "warning: {}\n", warning);
+  // KITTI's street scenes and 0.54 m baseline put the paper's 2 m stereo guess ~190 px off, so a
+  // KITTI folder without an explicit config gets the shipped KITTI setting.
+  const bool kitti_default = !options.config && raw.layout == DatasetLayout::kKitti;
+  VocaConfig config = options.config  ? loadConfig(*options.config)
+                      : kitti_default ? builtinConfig("kitti")
+                                      : VocaConfig{};
+  if (kitti_default && options.progress) fmt::print(stderr, "config: built-in 'kitti' (KITTI folder, no --config)\n");
+  if (options.mode) config.frontend.prior_mode = *options.mode;
   const std::optional<std::filesystem::path> calibration = options.calibration ? options.calibration : raw.calibration;
   if (!calibration) {
     throw InputError(

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "voca/config/builtin_configs.h"
 #include "voca/core/error.h"
 
 namespace voca {
@@ -118,18 +119,31 @@ VocaConfig parseConfig(const json& root, const std::string& context) {
   return config;
 }
 
-VocaConfig loadConfig(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(fmt::format("{}: cannot open the config file", file.string()));
+VocaConfig builtinConfig(const std::string& name) {
+  std::string known;
+  for (const BuiltinConfig& config : builtinConfigs()) {
+    if (config.name == name) return parseConfig(json::parse(config.json), fmt::format("built-in config '{}'", name));
+    known += fmt::format("{}{}", known.empty() ? "" : ", ", config.name);
+  }
+  throw InputError(fmt::format("unknown built-in config '{}' (shipped: {})", name, known));
+}
+
+VocaConfig loadConfig(const std::filesystem::path& file_or_name) {
+  const std::string& text_name = file_or_name.native();
+  if (!std::filesystem::exists(file_or_name) && !file_or_name.has_extension() && !file_or_name.has_parent_path()) {
+    return builtinConfig(text_name);
+  }
+  std::ifstream in(file_or_name);
+  if (!in) throw InputError(fmt::format("{}: cannot open the config file", file_or_name.string()));
   std::stringstream text;
   text << in.rdbuf();
   json root;
   try {
     root = json::parse(text.str());
   } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", file.string(), e.what()));
+    throw InputError(fmt::format("{}: not valid JSON: {}", file_or_name.string(), e.what()));
   }
-  return parseConfig(root, file.string());
+  return parseConfig(root, file_or_name.string());
 }
 
 }  // namespace voca

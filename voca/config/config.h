@@ -18,9 +18,13 @@ struct VocaConfig {
   BackendConfig backend;
 };
 
-// Reads and validates a config file. Throws InputError naming the file and the key, e.g.
-// "configs/x.json: frontend.pattern: expected 24 or 52, got 30".
-VocaConfig loadConfig(const std::filesystem::path& file);
+// Reads and validates a config file, or a shipped configuration by name ("euroc", "tumvi",
+// "kitti": configs/<name>_vo.json, compiled in) when no such file exists. Throws InputError naming
+// the file and the key, e.g. "configs/x.json: frontend.pattern: expected 24 or 52, got 30".
+VocaConfig loadConfig(const std::filesystem::path& file_or_name);
+
+// The shipped configuration by name, or InputError listing the names there are.
+VocaConfig builtinConfig(const std::string& name);
 
 // Validates an already parsed document; `context` prefixes error messages (usually the file name).
 VocaConfig parseConfig(const nlohmann::json& root, const std::string& context);
