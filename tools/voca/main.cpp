@@ -42,6 +42,14 @@ int main(int argc, char** argv) {
   for (const CommandSpec& spec : commands) {
     CLI::App* sub = app.add_subcommand(spec.name, spec.summary);
     runners.emplace_back(sub, spec.configure(*sub));
+    // `voca --help` lists one line per command; a longer description a command sets for itself
+    // belongs in its own --help, after the options.
+    if (sub->get_description() != spec.summary) {
+      const std::string details = sub->get_description();
+      const std::string footer = sub->get_footer();
+      sub->description(spec.summary);
+      sub->footer(footer.empty() ? details : details + "\n\n" + footer);
+    }
   }
 
   try {
