@@ -77,20 +77,13 @@ struct SynthWorld {
   }
 
   // Where the surface point seen at integer pixel px of cam0 in frame k0 appears in cam0 at frame k;
-  // nullopt at depth discontinuities (ground truth undefined there) or when occluded at frame k.
+  // nullopt where the patch straddles a depth discontinuity in either frame, or when occluded at frame k.
   std::optional<Eigen::Vector2d> truth(int k0, const Eigen::Vector2f& px, int k) const {
     const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
     const synth::RayTable& table = rays[0];
     if (x < 1 || y < 1 || x >= table.width() - 1 || y >= table.height() - 1 || !table.valid(x, y)) return std::nullopt;
     const float depth = synth::rayDepth(scene, table, pose(k0, 0), x, y);
-    // The patch (15x15 px) must lie on one surface: across a depth edge it deforms non-rigidly.
-    const int r = 7;
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) {
-        if (x + dx < 0 || y + dy < 0 || x + dx >= table.width() || y + dy >= table.height()) return std::nullopt;
-        const float d = synth::rayDepth(scene, table, pose(k0, 0), x + dx, y + dy);
-        if (std::abs(d - depth) > 0.03f * depth) return std::nullopt;
-      }
+    if (!patchOnOneSurface(k0, x, y, depth)) return std::nullopt;
     const Eigen::Vector3d p_world = pose(k0, 0) * (table.bearing(x, y).cast<double>() * depth);
     const Eigen::Vector3d p_cam = pose(k, 0).inverse() * p_world;
     Eigen::Vector2d uv;
@@ -99,7 +92,24 @@ struct SynthWorld {
     if (u < 0 || v < 0 || u >= table.width() || v >= table.height() || !table.valid(u, v)) return std::nullopt;
     const float seen = synth::rayDepth(scene, table, pose(k, 0), u, v);
     if (std::abs(seen - p_cam.norm()) > 0.03 * p_cam.norm()) return std::nullopt;
+    if (!patchOnOneSurface(k, u, v, seen)) return std::nullopt;
     return uv;
+  }
+
+  // Whether the 15x15 px window (the 52-point pattern's extent) around pixel (x, y) of cam0 in
+  // frame k sees one surface: no ray depth differs from the centre's by more than 3 %. Across a
+  // depth edge the patch deforms non-rigidly and parts of it appear or vanish, so KLT legitimately
+  // fails there; checked in the start frame and in the frame evaluated (an occluder may move in).
+  bool patchOnOneSurface(int k, int x, int y, float depth) const {
+    const synth::RayTable& table = rays[0];
+    const int r = 7;
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx) {
+        if (x + dx < 0 || y + dy < 0 || x + dx >= table.width() || y + dy >= table.height()) return false;
+        const float d = synth::rayDepth(scene, table, pose(k, 0), x + dx, y + dy);
+        if (std::abs(d - depth) > 0.03f * depth) return false;
+      }
+    return true;
   }
 };
 
@@ -197,11 +207,13 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
                                << quantile(errors, 0.9) << " px");
   REQUIRE(errors.size() > 300);
   // The issue asks for median < 0.05 px and p90 < 0.1 px; this scene does not meet it yet. The
-  // ground truth checks out (no signed bias: mean error (-0.016, 0.010) px; ray table reprojects to
-  // 3e-5 px; one-frame errors as large as 7-frame ones, so no drift). The error is image content:
-  // without lens blur median 0.21 / p90 0.48 px; with the 0.6 px PSF 0.125 / 0.31 px; noise-free
-  // 0.096 / 0.24 px (PSF 0.6) and 0.042 / 0.12 px (PSF 1.0). The bounds below are the measured
-  // values (deterministic rendering) plus ~30 % margin, guarding against regressions.
+  // ground truth checks out: no signed bias (mean error (-0.016, 0.010) px, no component along the
+  // motion), the ray table reprojects to 3e-5 px, one-frame errors (median 0.085 px) are close to
+  // 7-frame ones (0.11 px). The error is image content and the tracker's response to it: without
+  // lens blur median 0.21 / p90 0.48 px, with the 0.6 px PSF 0.12 / 0.30 px; noise-free 0.096 /
+  // 0.24 px (PSF 0.6), 0.042 / 0.12 px (PSF 1.0). The p90 tail is a few tracks slipping along
+  // edge-like texture (one drifts 0.3 -> 2.9 px over 7 frames). The bounds are the measured values
+  // (rendering is deterministic) plus ~35 % margin, guarding against regressions.
   CHECK(quantile(errors, 0.5) < 0.17);
   CHECK(quantile(errors, 0.9) < 0.4);
 }
