@@ -1,40 +1,11 @@
 // Proves the frontend's fixed-memory rule: after the first frames, track() never touches the heap.
-// This executable replaces the global operator new/delete with counting versions.
+// This executable replaces the global operator new/delete with the counting ones of test_alloc_counter.h.
 
 #include <doctest/doctest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
+#include "tests/test_alloc_counter.h"
 #include "tests/test_frontend_support.h"
 #include "voca/frontend/frontend.h"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const std::size_t a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 using namespace voca;
 
@@ -61,7 +32,7 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     long steady_allocations = 0, first_frame_allocations = 0;
     int detected_after_start = 0, tracked_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
-      const long before = g_allocations.load();
+      const long before = voca::test::g_allocations.load();
       // Every third frame is an I-frame, so bridging copies run inside the window too.
       const PictureType type = k % 3 == 2 ? PictureType::kI : PictureType::kP;
       field.reset(w, h, type);
@@ -76,9 +47,9 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
       in.picture_type = type;
       in.t_ns = k;
       frontend.track(in, out, stats);
-      if (k == 0) first_frame_allocations = g_allocations.load() - before;
+      if (k == 0) first_frame_allocations = voca::test::g_allocations.load() - before;
       if (k >= 2) {
-        steady_allocations += g_allocations.load() - before;
+        steady_allocations += voca::test::g_allocations.load() - before;
         detected_after_start += stats.detected;
         tracked_after_start += stats.temporal[0].kept + stats.temporal[1].kept;
       }
