@@ -140,4 +140,7 @@ TEST_CASE("voca synth rejects bad options with a clear error") {
   CHECK(runVoca("synth --out " + (scratch / "a").string() + " --motion sideways") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "b").string() + " --camera /nonexistent/calib.json") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "c").string() + " --rate 0") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "d").string() + " --psf-sigma 9") == 1 << 8);
+  // Two sources of motion at once is a usage error (CLI11's own exit code), not a silent choice.
+  CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") != 0);
 }

@@ -36,6 +36,7 @@ struct SynthOptions {
   std::uint64_t seed = 1;
   std::uint32_t scene_seed = 7;
   double noise_sigma = 2.0;
+  double psf_sigma_px = 0.0;
   int supersample = 3;
   int threads = 2;
 };
@@ -154,6 +155,9 @@ int runSynth(const SynthOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 1000.0)) throw voca::InputError("--rate: expected 0 < Hz <= 1000");
   if (options.seconds && !(*options.seconds > 0.0)) throw voca::InputError("--seconds: expected a positive number");
   if (!(options.noise_sigma >= 0.0)) throw voca::InputError("--noise-sigma: expected >= 0");
+  if (!(options.psf_sigma_px >= 0.0 && options.psf_sigma_px <= 5.0)) {
+    throw voca::InputError("--psf-sigma: expected 0 to 5 px");
+  }
   if (options.supersample < 1 || options.supersample > 8) throw voca::InputError("--supersample: expected 1..8");
   if (options.threads < 1) throw voca::InputError("--threads: expected >= 1");
 
@@ -192,6 +196,7 @@ int runSynth(const SynthOptions& options) {
     for (int c = 0; c < 2; ++c) {
       voca::synth::RenderSettings settings;
       settings.noise_sigma = static_cast<float>(options.noise_sigma);
+      settings.psf_sigma_px = static_cast<float>(options.psf_sigma_px);
       settings.noise_seed = options.seed;
       settings.frame_index = static_cast<std::uint64_t>(k);
       settings.camera_index = c;
@@ -263,6 +268,9 @@ const bool registered = voca::cli::registerCommand(
        app.add_option("--rate", options->rate_hz, "Frame rate, Hz")->capture_default_str();
        app.add_option("--seed", options->seed, "Seed of the sensor noise")->capture_default_str();
        app.add_option("--scene-seed", options->scene_seed, "Seed of the room's layout and textures")
+           ->capture_default_str();
+       app.add_option("--psf-sigma", options->psf_sigma_px,
+                      "Lens blur: Gaussian point spread, sigma in px (0 = none; ~0.6 is a typical real lens)")
            ->capture_default_str();
        app.add_option("--noise-sigma", options->noise_sigma, "Gaussian sensor noise, gray levels")
            ->capture_default_str();
