@@ -130,7 +130,7 @@ int runDemo(const DemoOptions& o) {
   if (!variants[0].result.ground_truth.empty()) fmt::print("  ground truth: {}\n", variants[0].result.ground_truth);
   fmt::print("  overlay video (blue previous, yellow MV prior, green tracked): {}\n", overlay.string());
   fmt::print("  sequences: {} (raw), {} (500 kbit/s video)\n", raw.string(), video.string());
-  fmt::print("compare yourself: voca eval --ref {} --est {}\n", variants[0].result.ground_truth,
+  fmt::print("compare yourself: voca eval --gt {} --est {}\n", variants[0].result.ground_truth,
              variants[1].trajectory.string());
   fmt::print("total time {:.0f} s\n", secondsSince(start));
   return 0;
