@@ -100,6 +100,41 @@ TEST_CASE("RGB PNG round trip, read back as luma") {
   for (int x = 0; x < 4; ++x) CHECK(gray(x, 1) == 60 * x);  // grey stays grey exactly
 }
 
+TEST_CASE("readPngRgb returns RGB files exactly and expands gray files") {
+  voca::test::ScratchDir dir("png-read-rgb");
+  RgbImage image(5, 3);
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      image(x, y) = Rgb8{static_cast<std::uint8_t>(50 * x), static_cast<std::uint8_t>(80 * y),
+                         static_cast<std::uint8_t>(255 - 40 * x - y)};
+    }
+  }
+  voca::writePngRgb(dir / "rgb.png", image.view());
+  RgbImage back;
+  voca::readPngRgb(dir / "rgb.png", back);
+  REQUIRE(back.width() == 5);
+  REQUIRE(back.height() == 3);
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      CHECK(back(x, y).r == image(x, y).r);
+      CHECK(back(x, y).g == image(x, y).g);
+      CHECK(back(x, y).b == image(x, y).b);
+    }
+  }
+
+  GrayImage gray(3, 2);
+  for (int i = 0; i < 6; ++i) gray.data()[i] = static_cast<std::uint8_t>(40 * i + 7);
+  voca::writePngGray(dir / "gray.png", gray.view());
+  voca::readPngRgb(dir / "gray.png", back);
+  REQUIRE(back.width() == 3);
+  for (int i = 0; i < 6; ++i) {
+    const Rgb8 p = back.data()[i];
+    CHECK((p.r == gray.data()[i] && p.g == gray.data()[i] && p.b == gray.data()[i]));
+  }
+  CHECK(voca::test::inputErrorOf([&] { voca::readPngRgb(dir / "missing.png", back); }).find("missing.png") !=
+        std::string::npos);
+}
+
 TEST_CASE("16-bit, palette and RGBA PNGs are converted to 8-bit gray") {
   voca::test::ScratchDir dir("png-formats");
   SUBCASE("16-bit gray keeps the high byte") {

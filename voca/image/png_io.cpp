@@ -54,7 +54,8 @@ struct Header {
   png_uint_32 height = 0;
 };
 
-bool readHeader(PngState& s, Header& header) {
+// Sets up libpng's conversions so rows arrive as 8-bit gray (channels 1) or packed RGB (channels 3).
+bool readHeader(PngState& s, Header& header, int channels) {
   if (setjmp(png_jmpbuf(s.png))) return false;
   png_init_io(s.png, s.file);
   png_set_sig_bytes(s.png, 8);
@@ -66,14 +67,18 @@ bool readHeader(PngState& s, Header& header) {
   if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(s.png);
   if (bit_depth == 16) png_set_strip_16(s.png);
   if ((color_type & PNG_COLOR_MASK_ALPHA) != 0) png_set_strip_alpha(s.png);
-  if ((color_type & PNG_COLOR_MASK_COLOR) != 0) {
+  const bool colour = (color_type & PNG_COLOR_MASK_COLOR) != 0;
+  if (channels == 1 && colour) {
     // error_action 1: convert silently; negative weights select libpng's default luma weights.
     png_set_rgb_to_gray_fixed(s.png, 1, -1, -1);
   }
+  if (channels == 3 && !colour) png_set_gray_to_rgb(s.png);
   png_set_interlace_handling(s.png);
   png_read_update_info(s.png, s.info);
-  if (png_get_channels(s.png, s.info) != 1 || png_get_rowbytes(s.png, s.info) != png_get_image_width(s.png, s.info)) {
-    std::snprintf(s.message, sizeof(s.message), "unsupported pixel format after conversion to 8-bit gray");
+  if (png_get_channels(s.png, s.info) != channels ||
+      png_get_rowbytes(s.png, s.info) != png_get_image_width(s.png, s.info) * static_cast<png_uint_32>(channels)) {
+    std::snprintf(s.message, sizeof(s.message), "unsupported pixel format after conversion to 8-bit %s",
+                  channels == 1 ? "gray" : "RGB");
     return false;
   }
   header.width = png_get_image_width(s.png, s.info);
@@ -81,12 +86,13 @@ bool readHeader(PngState& s, Header& header) {
   return true;
 }
 
-bool readPixels(PngState& s, GrayImage& out) {
+template <typename Pixel>
+bool readPixels(PngState& s, Image<Pixel>& out) {
   if (setjmp(png_jmpbuf(s.png))) return false;
   // Interlaced files come in several passes over the same rows; libpng merges them in place.
   const int passes = png_set_interlace_handling(s.png);
   for (int pass = 0; pass < passes; ++pass) {
-    for (int y = 0; y < out.height(); ++y) png_read_row(s.png, out.row(y), nullptr);
+    for (int y = 0; y < out.height(); ++y) png_read_row(s.png, reinterpret_cast<png_bytep>(out.row(y)), nullptr);
   }
   png_read_end(s.png, nullptr);
   return true;
@@ -133,9 +139,9 @@ void writePng(const std::filesystem::path& path, const std::uint8_t* data, int w
   }
 }
 
-}  // namespace
-
-void readPngGray(const std::filesystem::path& path, GrayImage& out) {
+template <typename Pixel>
+void readPng(const std::filesystem::path& path, Image<Pixel>& out) {
+  constexpr int kChannels = static_cast<int>(sizeof(Pixel));
   PngState s;
   s.file = std::fopen(path.c_str(), "rb");
   if (s.file == nullptr) throw InputError(path.string() + ": cannot open image: " + std::strerror(errno));
@@ -148,10 +154,16 @@ void readPngGray(const std::filesystem::path& path, GrayImage& out) {
   if (s.png != nullptr) s.info = png_create_info_struct(s.png);
   if (s.png == nullptr || s.info == nullptr) throw RuntimeFailure("libpng: out of memory");
   Header header;
-  if (!readHeader(s, header)) throw InputError(path.string() + ": corrupt PNG: " + s.message);
+  if (!readHeader(s, header, kChannels)) throw InputError(path.string() + ": corrupt PNG: " + s.message);
   out.resize(static_cast<int>(header.width), static_cast<int>(header.height));
   if (!readPixels(s, out)) throw InputError(path.string() + ": corrupt PNG: " + s.message);
 }
+
+}  // namespace
+
+void readPngGray(const std::filesystem::path& path, GrayImage& out) { readPng(path, out); }
+
+void readPngRgb(const std::filesystem::path& path, RgbImage& out) { readPng(path, out); }
 
 GrayImage readPngGray(const std::filesystem::path& path) {
   GrayImage image;

@@ -13,6 +13,9 @@ namespace voca {
 void readPngGray(const std::filesystem::path& path, GrayImage& out);
 GrayImage readPngGray(const std::filesystem::path& path);
 
+// Reads any PNG as packed 8-bit RGB (gray expanded, alpha dropped), e.g. to check visualisations.
+void readPngRgb(const std::filesystem::path& path, RgbImage& out);
+
 // Write 8-bit gray / RGB PNGs. Throws InputError naming the file when it cannot be written.
 void writePngGray(const std::filesystem::path& path, GrayView image);
 void writePngRgb(const std::filesystem::path& path, RgbView image);
