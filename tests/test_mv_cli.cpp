@@ -1,0 +1,75 @@
+// End to end through the `voca` binary: synth -> encode -> `voca mv`, checking that the pictures of
+// what the codec saw are written, sized like the video, and carry vectors on P-frames only.
+
+#include <cstdlib>
+#include <string>
+
+#include "drivers/decode/demuxer.h"
+#include "tests/test_support.h"
+#include "voca/image/png_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int runVoca(const std::string& args) {
+  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " >/dev/null 2>&1";
+  return std::system(command.c_str());
+}
+
+// Pixels where the picture is not gray: the coloured partitions, arrows and outlier marks.
+long colouredPixels(const fs::path& png) {
+  voca::RgbImage image;
+  voca::readPngRgb(png, image);
+  long coloured = 0;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      const voca::Rgb8 p = image(x, y);
+      coloured += (p.r != p.g || p.g != p.b) ? 1 : 0;
+    }
+  }
+  return coloured;
+}
+
+}  // namespace
+
+TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4") {
+  voca::test::ScratchDir dir("mv-cli");
+  const fs::path raw = dir / "raw";
+  const fs::path video = dir / "video";
+  // 8 frames of fast rotation: tens of pixels of motion, so every P-frame has many inter blocks.
+  REQUIRE(runVoca("synth --out " + raw.string() + " --seconds 0.4 --motion fast-rotation --threads 2") == 0);
+  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+
+  const fs::path pngs = dir / "png";
+  REQUIRE(runVoca("mv " + video.string() + " --out " + pngs.string() + " --frames 0:6") == 0);
+  for (int frame = 0; frame < 6; ++frame) {
+    const fs::path png = pngs / ("mv_00000" + std::to_string(frame) + ".png");
+    CAPTURE(png.string());
+    REQUIRE(fs::exists(png));
+    voca::GrayImage gray;
+    voca::readPngGray(png, gray);
+    CHECK(gray.width() == 752);
+    CHECK(gray.height() == 480);
+  }
+  CHECK_FALSE(fs::exists(pngs / "mv_000006.png"));  // the range end is exclusive
+  // Frame 0 is the I-frame: no vectors, so nothing coloured; P-frames carry partitions and arrows
+  // over a good part of the picture (at least 1 % of the pixels).
+  CHECK(colouredPixels(pngs / "mv_000000.png") == 0);
+  for (int frame = 1; frame < 6; ++frame)
+    CHECK(colouredPixels(pngs / ("mv_00000" + std::to_string(frame) + ".png")) > 752 * 480 / 100);
+
+  const fs::path mp4 = dir / "mp4";
+  REQUIRE(runVoca("mv " + video.string() + " --out " + mp4.string() + " --format mp4 --camera 1") == 0);
+  voca::decode::Demuxer demuxer(mp4 / "mv.mp4");
+  CHECK(demuxer.stream().width == 752);
+  CHECK(demuxer.stream().height == 480);
+  voca::decode::Packet packet;
+  int packets = 0;
+  while (demuxer.read(packet)) ++packets;
+  CHECK(packets == 8);
+
+  // Bad input: a folder that is not a video dataset, and a camera that does not exist.
+  CHECK(runVoca("mv " + raw.string() + " --out " + (dir / "bad1").string()) != 0);
+  CHECK(runVoca("mv " + video.string() + " --out " + (dir / "bad2").string() + " --camera 2") != 0);
+}
