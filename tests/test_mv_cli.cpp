@@ -1,7 +1,6 @@
 // End to end through the `voca` binary: synth -> encode -> `voca mv`, checking that the pictures of
 // what the codec saw are written, sized like the video, and carry vectors on P-frames only.
 
-#include <cstdlib>
 #include <string>
 
 #include "drivers/decode/demuxer.h"
@@ -12,10 +11,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int runVoca(const std::string& args) {
-  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " >/dev/null 2>&1";
-  return std::system(command.c_str());
-}
+using voca::test::runVoca;
 
 // Pixels where the picture is not gray: the coloured partitions, arrows and outlier marks.
 long colouredPixels(const fs::path& png) {

@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -24,6 +25,13 @@ inline std::optional<std::filesystem::path> sharedData(const std::string& relati
     return std::nullopt;
   }
   return path;
+}
+
+// Runs the built `voca` binary with the given arguments, output discarded. Returns std::system's
+// status: the exit code shifted left by 8 on Linux, 0 on success.
+inline int runVoca(const std::string& args) {
+  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " >/dev/null 2>&1";
+  return std::system(command.c_str());
 }
 
 // A fresh folder under the build tree, removed when the test ends.

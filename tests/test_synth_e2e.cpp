@@ -1,6 +1,5 @@
 // End-to-end checks of `voca synth`: runs the command and reads its output with the project's readers.
 
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -16,10 +15,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int runVoca(const std::string& args) {
-  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " 2>/dev/null";
-  return std::system(command.c_str());
-}
+using voca::test::runVoca;
 
 std::string readBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
