@@ -7,3 +7,4 @@ voca_add_test(test_frontend_e2e SOURCES test_frontend_e2e.cpp
        voca_drivers_encode_dataset voca_drivers_decode
   LABELS e2e TIMEOUT 600)
 target_compile_definitions(test_frontend_e2e PRIVATE VOCA_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+voca_add_test(test_patch_kernels SOURCES test_patch_kernels.cpp LIBS voca_frontend)

@@ -1,5 +1,7 @@
 #include "voca/frontend/patch.h"
 
+#include "voca/frontend/patch_kernels.h"
+
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -55,26 +57,10 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     // Fast path, the whole patch inside: pattern offsets are integers, so every sample has the same
     // bilinear weights and only the base pointer moves.
     const int ix = static_cast<int>(center.x()), iy = static_cast<int>(center.y());
-    const float fx = center.x() - static_cast<float>(ix), fy = center.y() - static_cast<float>(iy);
-    const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
-    const std::ptrdiff_t st = image.stride;
-    const float* base = image.data + static_cast<std::ptrdiff_t>(iy) * st + ix;
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const float* r0 =
-          base + static_cast<std::ptrdiff_t>(pattern.y[k]) * st + static_cast<std::ptrdiff_t>(pattern.x[k]);
-      const float* r1 = r0 + st;
-      const float v = w00 * r0[0] + w10 * r0[1] + w01 * r1[0] + w11 * r1[1];
-      const float gx =
-          0.5f * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
-      const float gy = 0.5f * (w00 * (r1[0] - r0[-st]) + w10 * (r1[1] - r0[1 - st]) + w01 * (r1[st] - r0[0]) +
-                               w11 * (r1[st + 1] - r0[1]));
-      value[k] = v;
-      jpix[0][k] = gx;
-      jpix[1][k] = gy;
-      jpix[2][k] = -gx * pattern.y[k] + gy * pattern.x[k];
-      sum += v;
-    }
+    const float* base = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
+    sum = patch_kernels::sampleTemplate<simd4::Native>(base, image.stride, pattern, center.x() - static_cast<float>(ix),
+                                                       center.y() - static_cast<float>(iy), value.data(), jpix[0].data(),
+                                                       jpix[1].data(), jpix[2].data());
     count = n;
   } else {
     for (int i = 0; i < n; ++i) {
@@ -99,11 +85,9 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   if (2 * count <= n || !(sum > 1e-3f * static_cast<float>(count))) return;
   const float mean = sum / static_cast<float>(count);
   const float inv_mean = 1.f / mean;
-  float jsum[3] = {0.f, 0.f, 0.f};
-  for (int c = 0; c < 3; ++c) {
-    for (int i = 0; i < n; ++i) jsum[c] += jpix[c][static_cast<std::size_t>(i)];
-    jsum[c] /= static_cast<float>(count);
-  }
+  float jsum[3];
+  for (int c = 0; c < 3; ++c)
+    jsum[c] = patch_kernels::sum<simd4::Native>(jpix[c].data(), n) / static_cast<float>(count);
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
   for (int i = 0; i < n; ++i) {
@@ -112,15 +96,10 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     value[k] = ok ? value[k] * inv_mean : -1.f;
     for (int c = 0; c < 3; ++c) jac[c][k] = ok ? (jpix[c][k] - value[k] * jsum[c]) * inv_mean : 0.f;
   }
-  // H = J^T J from six float dot products over contiguous arrays (vectorisable).
+  // H = J^T J from six float dot products over contiguous arrays.
   float h[3][3];
-  for (int a = 0; a < 3; ++a) {
-    for (int b = a; b < 3; ++b) {
-      float acc = 0.f;
-      for (int i = 0; i < n; ++i) acc += jac[a][static_cast<std::size_t>(i)] * jac[b][static_cast<std::size_t>(i)];
-      h[a][b] = h[b][a] = acc;
-    }
-  }
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) h[a][b] = h[b][a] = patch_kernels::dot<simd4::Native>(jac[a].data(), jac[b].data(), n);
   Eigen::Matrix3d hessian;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) hessian(a, b) = h[a][b];
@@ -141,6 +120,8 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     value[k] = -1.f;
     step[0][k] = step[1][k] = step[2][k] = 0.f;
   }
+  // Invalid points have a zero step, so their -1 marker adds nothing.
+  for (int r = 0; r < 3; ++r) step_dot_value[r] = patch_kernels::dot<simd4::Native>(step[r].data(), value.data(), n);
   valid = true;
 }
 
@@ -154,13 +135,8 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
   int count = 0;
   if (tmpl.all_points_valid && canSample(target, tx - r, ty - r) && canSample(target, tx + r, ty + r)) {
     // Fast path, every point valid on both sides: no per-point tests.
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const float x = c * pattern.x[k] - s * pattern.y[k] + tx;
-      const float y = s * pattern.x[k] + c * pattern.y[k] + ty;
-      residual[k] = sampleBilinear(target, x, y);
-    }
-    for (int i = 0; i < n; ++i) sum += residual[static_cast<std::size_t>(i)];
+    sum = patch_kernels::sampleWarped<simd4::Native>(target.data, target.stride, pattern, n, c, s, tx, ty,
+                                                     residual.data(), nullptr, nullptr);
     count = n;
     if (!(sum > 1e-3f * static_cast<float>(count))) return 0;
     const float inv_mean = static_cast<float>(count) / sum;
@@ -199,15 +175,24 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
   const float max_step2 = params.max_step_px * params.max_step_px;
   const float min_step = coarse ? params.coarse_min_step_px : params.min_step_px;
   const float min_step2 = min_step * min_step;
+  const float reach = pattern.max_norm;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
-    const int used = patchResidual(target, tmpl, pattern, T, residual);
-    if (2 * used <= n) return AlignStatus::kTooFewPoints;
-    float inc[3] = {0.f, 0.f, 0.f};
-    for (int r = 0; r < 3; ++r) {
-      float acc = 0.f;
-      for (int i = 0; i < n; ++i)
-        acc += tmpl.step[r][static_cast<std::size_t>(i)] * residual[static_cast<std::size_t>(i)];
-      inc[r] = acc;
+    float inc[3];
+    const float tx = T.translation().x(), ty = T.translation().y();
+    if (tmpl.all_points_valid && canSample(target, tx - reach, ty - reach) && canSample(target, tx + reach, ty + reach)) {
+      // Every point inside: one pass samples the target and forms H^-1 J^T r directly, as
+      // sum_i step_i (I_i / mean - value_i) = (sum_i step_i I_i) / mean - sum_i step_i value_i.
+      float dots[3];
+      const float sum =
+          patch_kernels::sampleWarped<simd4::Native>(target.data, target.stride, pattern, n, T.unitComplex().x(),
+                                                     T.unitComplex().y(), tx, ty, nullptr, tmpl.step, dots);
+      if (!(sum > 1e-3f * static_cast<float>(n))) return AlignStatus::kTooFewPoints;
+      const float inv_mean = static_cast<float>(n) / sum;
+      for (int r = 0; r < 3; ++r) inc[r] = inv_mean * dots[r] - tmpl.step_dot_value[r];
+    } else {
+      const int used = patchResidual(target, tmpl, pattern, T, residual);
+      if (2 * used <= n) return AlignStatus::kTooFewPoints;
+      for (int r = 0; r < 3; ++r) inc[r] = patch_kernels::dot<simd4::Native>(tmpl.step[r].data(), residual.data(), n);
     }
     if (!std::isfinite(inc[0]) || !std::isfinite(inc[1]) || !std::isfinite(inc[2])) return AlignStatus::kNonFinite;
     const float step2 = inc[0] * inc[0] + inc[1] * inc[1];

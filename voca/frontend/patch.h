@@ -71,6 +71,7 @@ struct PatchTemplate {
   alignas(32) std::array<float, PatchPattern::kMaxSize> value{};    // normalised, -1 = invalid
   alignas(32) std::array<float, PatchPattern::kMaxSize> jac[3]{};   // d residual / d (tx, ty, theta)
   alignas(32) std::array<float, PatchPattern::kMaxSize> step[3]{};  // rows of H^-1 J^T
+  float step_dot_value[3]{};  // step[r] . value: lets an iteration skip forming the residual
   bool valid = false;
   bool all_points_valid = false;  // no point marked invalid: residuals may skip the per-point test
 

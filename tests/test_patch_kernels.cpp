@@ -1,0 +1,193 @@
+// The KLT inner loops (voca/frontend/patch_kernels.h): the native SIMD backend (SSE2 on x86-64,
+// NEON on ARM; this test also runs under qemu-aarch64 in CI) against the portable one, and both
+// against the scalar per-point samplers of patch.h.
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "voca/frontend/patch.h"
+#include "voca/frontend/patch_kernels.h"
+#include "voca/frontend/simd4.h"
+
+using namespace voca;
+namespace kernels = voca::patch_kernels;
+
+namespace {
+
+// A float image of smooth random structure plus pixel noise, so interpolation and gradients see
+// every kind of local shape; values stay positive like intensities.
+FloatImage randomImage(int width, int height, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  FloatImage image(width, height);
+  const float a = 0.05f + 0.2f * unit(rng), b = 0.05f + 0.2f * unit(rng);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      image(x, y) = 120.f + 60.f * std::sin(a * static_cast<float>(x) + b * static_cast<float>(y)) + 40.f * unit(rng);
+  return image;
+}
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+}  // namespace
+
+TEST_CASE("simd4: the native backend is the one this build should use") {
+  MESSAGE("native backend: " << std::string(simd4::Native::kName));
+#if defined(__ARM_NEON)
+  CHECK(std::string(simd4::Native::kName) == "neon");
+#elif defined(__SSE2__)
+  CHECK(std::string(simd4::Native::kName) == "sse2");
+#else
+  CHECK(std::string(simd4::Native::kName) == "portable");
+#endif
+}
+
+TEST_CASE("simd4: lane operations agree with the portable backend bit for bit") {
+  using N = simd4::Native;
+  using P = simd4::Portable;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> dist(-300.f, 300.f);
+  for (int trial = 0; trial < 200; ++trial) {
+    float a[4], b[4], n_out[4], p_out[4];
+    for (int k = 0; k < 4; ++k) {
+      a[k] = dist(rng);
+      b[k] = dist(rng);
+    }
+    N::store(n_out, N::add(N::mul(N::load(a), N::load(b)), N::truncate(N::sub(N::load(a), N::load(b)))));
+    P::store(p_out, P::add(P::mul(P::load(a), P::load(b)), P::truncate(P::sub(P::load(a), P::load(b)))));
+    for (int k = 0; k < 4; ++k) CHECK(sameBits(n_out[k], p_out[k]));
+    CHECK(sameBits(N::sum(N::load(a)), P::sum(P::load(a))));
+    std::int32_t n_int[4], p_int[4];
+    N::toInt(N::load(a), n_int);
+    P::toInt(P::load(a), p_int);
+    for (int k = 0; k < 4; ++k) CHECK(n_int[k] == p_int[k]);
+  }
+  // Known answers: truncation goes towards zero, the sum is (a0 + a1) + (a2 + a3).
+  const float values[4] = {1.75f, -1.75f, 2.5f, 1e8f};
+  float truncated[4];
+  N::store(truncated, N::truncate(N::load(values)));
+  CHECK(truncated[0] == 1.f);
+  CHECK(truncated[1] == -1.f);
+  CHECK(truncated[2] == 2.f);
+  CHECK(N::sum(N::load(values)) == (1.75f + -1.75f) + (2.5f + 1e8f));
+  // Gathers: lane k reads from pointer k.
+  const float rows[4][4] = {{1, 2, 3, 4}, {5, 6, 7, 8}, {9, 10, 11, 12}, {13, 14, 15, 16}};
+  const float* p[4] = {rows[0], rows[1], rows[2], rows[3]};
+  N::F columns[4], first, second;
+  N::gather4(p, columns);
+  N::gather2(p, first, second);
+  float out[4];
+  for (int j = 0; j < 4; ++j) {
+    N::store(out, columns[j]);
+    for (int k = 0; k < 4; ++k) CHECK(out[k] == rows[k][j]);
+  }
+  N::store(out, second);
+  for (int k = 0; k < 4; ++k) CHECK(out[k] == rows[k][1]);
+}
+
+TEST_CASE("patch kernels: template sampling, native == portable, and both match sampleWithGradient") {
+  const FloatImage image = randomImage(96, 80, 11);
+  const FloatView view = image.view();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> pos(10.f, 70.f);
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    for (int trial = 0; trial < 100; ++trial) {
+      const Eigen::Vector2f centre(pos(rng), pos(rng));
+      const int ix = static_cast<int>(centre.x()), iy = static_cast<int>(centre.y());
+      const float fx = centre.x() - static_cast<float>(ix), fy = centre.y() - static_cast<float>(iy);
+      const float* base = &view(ix, iy);
+      std::array<float, PatchPattern::kMaxSize> nv, ntx, nty, nth, pv, ptx, pty, pth;
+      const float n_sum = kernels::sampleTemplate<simd4::Native>(base, view.stride, *pattern, fx, fy, nv.data(),
+                                                                  ntx.data(), nty.data(), nth.data());
+      const float p_sum = kernels::sampleTemplate<simd4::Portable>(base, view.stride, *pattern, fx, fy, pv.data(),
+                                                                    ptx.data(), pty.data(), pth.data());
+      CHECK(sameBits(n_sum, p_sum));
+      double reference_sum = 0.0;
+      for (int i = 0; i < pattern->size; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        CHECK(sameBits(nv[k], pv[k]));
+        CHECK(sameBits(ntx[k], ptx[k]));
+        CHECK(sameBits(nty[k], pty[k]));
+        CHECK(sameBits(nth[k], pth[k]));
+        // The per-point scalar sampler computes the same interpolation with weights formed per
+        // point; float rounding differs by a few ulps of values up to ~250.
+        const Eigen::Vector3f ref = sampleWithGradient(view, centre.x() + pattern->x[k], centre.y() + pattern->y[k]);
+        CHECK(std::abs(nv[k] - ref[0]) < 1e-3f);
+        CHECK(std::abs(ntx[k] - ref[1]) < 1e-3f);
+        CHECK(std::abs(nty[k] - ref[2]) < 1e-3f);
+        CHECK(std::abs(nth[k] - (-ref[1] * pattern->y[k] + ref[2] * pattern->x[k])) < 1e-2f);
+        reference_sum += ref[0];
+      }
+      CHECK(std::abs(n_sum - reference_sum) < 1e-2);
+    }
+  }
+}
+
+TEST_CASE("patch kernels: warped sampling and fused dot products, native == portable == sampleBilinear") {
+  const FloatImage image = randomImage(120, 90, 5);
+  const FloatView view = image.view();
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> pos(15.f, 70.f), angle(-0.8f, 0.8f), weight(-2.f, 2.f);
+  std::array<float, PatchPattern::kMaxSize> step[3];
+  for (auto& row : step)
+    for (float& w : row) w = weight(rng);
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    const int n = pattern->size;
+    for (int trial = 0; trial < 100; ++trial) {
+      const float theta = angle(rng), c = std::cos(theta), s = std::sin(theta);
+      const float tx = pos(rng), ty = pos(rng);
+      std::array<float, PatchPattern::kMaxSize> n_out, p_out;
+      float n_dots[3], p_dots[3];
+      const float n_sum = kernels::sampleWarped<simd4::Native>(view.data, view.stride, *pattern, n, c, s, tx, ty,
+                                                               n_out.data(), step, n_dots);
+      const float p_sum = kernels::sampleWarped<simd4::Portable>(view.data, view.stride, *pattern, n, c, s, tx, ty,
+                                                                 p_out.data(), step, p_dots);
+      CHECK(sameBits(n_sum, p_sum));
+      for (int r = 0; r < 3; ++r) CHECK(sameBits(n_dots[r], p_dots[r]));
+      double dots[3] = {0.0, 0.0, 0.0};
+      for (int i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        CHECK(sameBits(n_out[k], p_out[k]));
+        const float x = c * pattern->x[k] - s * pattern->y[k] + tx;
+        const float y = s * pattern->x[k] + c * pattern->y[k] + ty;
+        // Same expression, same operation order: identical to the scalar sampler.
+        CHECK(sameBits(n_out[k], sampleBilinear(view, x, y)));
+        for (int r = 0; r < 3; ++r) dots[r] += static_cast<double>(step[r][k]) * n_out[k];
+      }
+      // Float accumulation of up to 52 products of size ~500 against a double one.
+      for (int r = 0; r < 3; ++r) CHECK(std::abs(n_dots[r] - dots[r]) < 0.05);
+      // Without outputs the sum is the same.
+      CHECK(sameBits(kernels::sampleWarped<simd4::Native>(view.data, view.stride, *pattern, n, c, s, tx, ty, nullptr,
+                                                          nullptr, nullptr),
+                     n_sum));
+    }
+  }
+}
+
+TEST_CASE("patch kernels: dot and sum, native == portable, against a double reference") {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> dist(-10.f, 10.f);
+  std::array<float, PatchPattern::kMaxSize> a, b;
+  for (int trial = 0; trial < 50; ++trial) {
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      a[k] = dist(rng);
+      b[k] = dist(rng);
+    }
+    for (int n : {4, 24, 52}) {
+      const float nd = kernels::dot<simd4::Native>(a.data(), b.data(), n);
+      CHECK(sameBits(nd, kernels::dot<simd4::Portable>(a.data(), b.data(), n)));
+      const float ns = kernels::sum<simd4::Native>(a.data(), n);
+      CHECK(sameBits(ns, kernels::sum<simd4::Portable>(a.data(), n)));
+      double rd = 0.0, rs = 0.0;
+      for (int i = 0; i < n; ++i) {
+        rd += static_cast<double>(a[static_cast<std::size_t>(i)]) * b[static_cast<std::size_t>(i)];
+        rs += a[static_cast<std::size_t>(i)];
+      }
+      CHECK(std::abs(nd - rd) < 1e-3);
+      CHECK(std::abs(ns - rs) < 1e-4);
+    }
+  }
+}
