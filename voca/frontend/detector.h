@@ -42,8 +42,17 @@ class GridDetector {
 
  private:
   int grid_size_px_ = 0;
+  // A corner of one cell at the lowest threshold; it passes the segment test at every threshold t
+  // with t < max(bright, dark) (the arc strengths, see detector.cpp).
+  struct Candidate {
+    int x = 0;
+    int y = 0;
+    std::uint8_t bright = 0;
+    std::uint8_t dark = 0;
+  };
   std::vector<std::uint8_t> occupied_;
-  std::vector<Eigen::Vector2i> candidates_;  // corners of one cell at the lowest threshold
+  std::vector<std::uint8_t> row_buffers_;  // arc strengths (bright, dark) of one row of a cell
+  std::vector<Candidate> candidates_;
 };
 
 }  // namespace voca
