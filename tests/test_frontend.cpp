@@ -72,6 +72,33 @@ TEST_CASE("pyramid: binomial smoothing keeps linear ramps, so level l samples le
   }
 }
 
+TEST_CASE("pyramid: presmooth applies [1 2 1]/4 to level 0: ramps and constants kept, Nyquist detail removed") {
+  const int w = 64, h = 48;
+  ImagePyramid smooth(w, h, 3, true), plain(w, h, 3, false);
+  // A linear ramp passes a symmetric kernel unchanged away from the border (the replicated border
+  // bends it there); 8-bit inputs at integer steps are exact.
+  const GrayImage ramp = renderArbitrary(w, h, [](double x, double y) { return 20.0 + 2.0 * x + 1.0 * y; });
+  smooth.build(ramp.view());
+  plain.build(ramp.view());
+  for (int y = 1; y < h - 1; ++y)
+    for (int x = 1; x < w - 1; ++x) CHECK(smooth.level(0)(x, y) == plain.level(0)(x, y));
+  // Constant: unchanged everywhere, borders included.
+  const GrayImage flat(w, h, 90);
+  smooth.build(flat.view());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) CHECK(smooth.level(0)(x, y) == 90.f);
+  // A one-pixel checkerboard (the Nyquist frequency) has zero response: the mean remains.
+  const GrayImage checker = renderArbitrary(w, h, [](double x, double y) {
+    return (static_cast<int>(x) + static_cast<int>(y)) % 2 == 0 ? 100.0 : 200.0;
+  });
+  smooth.build(checker.view());
+  for (int y = 1; y < h - 1; ++y)
+    for (int x = 1; x < w - 1; ++x) CHECK(smooth.level(0)(x, y) == 150.f);
+  // The other levels are built from the smoothed level 0, with the same sizes.
+  CHECK(smooth.level(2).width == plain.level(2).width);
+  CHECK(smooth.level(2)(5, 5) == doctest::Approx(150.f));
+}
+
 TEST_CASE("patterns: 24 and 52 points, symmetric, distinct, on the 2 px grid inside 11x11 and 15x15") {
   for (const auto& [pattern, half] : {std::pair{&pattern24(), 5.f}, std::pair{&pattern52(), 7.f}}) {
     float sx = 0.f, sy = 0.f;

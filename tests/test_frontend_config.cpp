@@ -50,12 +50,14 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(e.prior_mode == PriorMode::kMvParallelOf);
   CHECK(e.consensus_tolerance_px2 == 0.05);
   CHECK(e.bridge_iframes);
+  CHECK_FALSE(e.presmooth);  // not in the paper: off in its configurations
   const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
   CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
   CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
   CHECK(tumvi.frontend.pattern == 52);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"presmooth": true}})"), "x").frontend.presmooth);
   CHECK(empty.frontend.grid_size_px == e.grid_size_px);
   CHECK(empty.frontend.prior_mode == e.prior_mode);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_mode": "none", "pattern": 24}})"), "x")
@@ -95,6 +97,9 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
 
   message = errorFor(R"({"frontend": {"matching_guess": "same_pixel"}})");
   CHECK(contains(message, "frontend.matching_guess"));
+
+  message = errorFor(R"({"frontend": {"presmooth": "yes"}})");
+  CHECK(contains(message, "frontend.presmooth: expected true or false"));
 
   message = errorFor(R"({"frontend": {"bridge_iframes": 1}})");
   CHECK(contains(message, "frontend.bridge_iframes: expected true or false"));

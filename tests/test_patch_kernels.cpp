@@ -1,4 +1,4 @@
-// The KLT inner loops (voca/frontend/patch_kernels.h): the native SIMD backend (SSE2 on x86-64,
+// The KLT inner loops (voca/frontend/patch_kernels.h, pyramid_kernels.h): the native SIMD backend (SSE2 on x86-64,
 // NEON on ARM; this test also runs under qemu-aarch64 in CI) against the portable one, and both
 // against the scalar per-point samplers of patch.h.
 
@@ -7,9 +7,11 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "voca/frontend/patch.h"
 #include "voca/frontend/patch_kernels.h"
+#include "voca/frontend/pyramid_kernels.h"
 #include "voca/frontend/simd4.h"
 
 using namespace voca;
@@ -190,4 +192,25 @@ TEST_CASE("patch kernels: dot and sum, native == portable, against a double refe
       CHECK(std::abs(ns - rs) < 1e-4);
     }
   }
+}
+
+TEST_CASE("pyramid kernel: row reduction, native == portable == the [1 4 6 4 1]/16 formula") {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> dist(0.f, 255.f);
+  std::vector<float> row(101);
+  for (float& v : row) v = dist(rng);
+  // Outputs x in [1, 46): reads s[2x - 2] .. s[2x + 9] of the last block, inside the 101 values.
+  std::vector<float> native(50, -1.f), portable(50, -1.f);
+  const int native_end = pyramid_kernels::reduceRow<simd4::Native>(row.data(), native.data(), 1, 46);
+  const int portable_end = pyramid_kernels::reduceRow<simd4::Portable>(row.data(), portable.data(), 1, 46);
+  CHECK(native_end == 45);  // blocks of four from 1: the 45th output is left to the caller
+  CHECK(portable_end == native_end);
+  for (int x = 1; x < native_end; ++x) {
+    const float* c = row.data() + 2 * x;
+    const float expected = (c[-2] + c[2] + 4.f * (c[-1] + c[1]) + 6.f * c[0]) * (1.f / 16.f);
+    CHECK(sameBits(native[static_cast<std::size_t>(x)], expected));
+    CHECK(sameBits(portable[static_cast<std::size_t>(x)], expected));
+  }
+  CHECK(native[0] == -1.f);  // nothing written outside [begin, end)
+  CHECK(native[45] == -1.f);
 }

@@ -54,7 +54,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   for (int c = 0; c < 2; ++c) {
     cameras_model_[static_cast<std::size_t>(c)] = rig.cameras[static_cast<std::size_t>(c)].camera;
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
-    for (ImagePyramid& pyramid : cam.pyramids) pyramid = ImagePyramid(max_width, max_height, num_levels_);
+    for (ImagePyramid& pyramid : cam.pyramids) pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth);
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));

@@ -44,6 +44,9 @@ struct FrontendConfig {
   PriorMode prior_mode = PriorMode::kMvParallelOf;
   double consensus_tolerance_px2 = 0.05;
   bool bridge_iframes = true;  // reuse the last P-frame's motion on I-frames
+  // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias of
+  // bilinear interpolation on sharp images (see ImagePyramid). Not in Basalt or the paper.
+  bool presmooth = false;
 };
 
 }  // namespace voca

@@ -56,6 +56,13 @@ struct Portable {
     for (int j = 0; j < 4; ++j)
       for (int k = 0; k < 4; ++k) out[j].v[k] = p[k][j];
   }
+  // even = (p[0], p[2], p[4], p[6]), odd = (p[1], p[3], p[5], p[7]).
+  static void deinterleave(const float* p, F& even, F& odd) {
+    for (int k = 0; k < 4; ++k) {
+      even.v[k] = p[2 * k];
+      odd.v[k] = p[2 * k + 1];
+    }
+  }
 };
 
 #if defined(__SSE2__)
@@ -92,6 +99,11 @@ struct Sse2 {
     out[2] = r2;
     out[3] = r3;
   }
+  static void deinterleave(const float* p, F& even, F& odd) {
+    const F lo = _mm_loadu_ps(p), hi = _mm_loadu_ps(p + 4);
+    even = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));
+    odd = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1));
+  }
 };
 #endif
 
@@ -127,6 +139,11 @@ struct Neon {
     out[1] = vcombine_f32(vget_low_f32(t01.val[1]), vget_low_f32(t23.val[1]));
     out[2] = vcombine_f32(vget_high_f32(t01.val[0]), vget_high_f32(t23.val[0]));
     out[3] = vcombine_f32(vget_high_f32(t01.val[1]), vget_high_f32(t23.val[1]));
+  }
+  static void deinterleave(const float* p, F& even, F& odd) {
+    const float32x4x2_t split = vld2q_f32(p);
+    even = split.val[0];
+    odd = split.val[1];
   }
 };
 #endif
