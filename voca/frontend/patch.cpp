@@ -107,13 +107,14 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   const double det = hessian.determinant();
   // Scale-free test for an untextured (rank-deficient) patch.
   if (!(trace > 0.0) || !(det > 1e-9 * trace * trace * trace)) return;
-  const Eigen::Matrix3d inverse = hessian.inverse();
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    for (int r = 0; r < 3; ++r) {
-      step[r][k] =
-          static_cast<float>(inverse(r, 0) * jac[0][k] + inverse(r, 1) * jac[1][k] + inverse(r, 2) * jac[2][k]);
-    }
+  // The inverse in double (H may be poorly conditioned), the rows of H^-1 J^T in float: plain
+  // loops over contiguous arrays that the compiler vectorises.
+  const Eigen::Matrix3f inverse = hessian.inverse().cast<float>();
+  for (int r = 0; r < 3; ++r) {
+    const float a = inverse(r, 0), b = inverse(r, 1), c = inverse(r, 2);
+    float* out = step[r].data();
+    const float *j0 = jac[0].data(), *j1 = jac[1].data(), *j2 = jac[2].data();
+    for (int i = 0; i < n; ++i) out[i] = a * j0[i] + b * j1[i] + c * j2[i];
   }
   for (int i = n; i < PatchPattern::kMaxSize; ++i) {
     const auto k = static_cast<std::size_t>(i);
