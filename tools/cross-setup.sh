@@ -61,15 +61,32 @@ fi
 
 export DEBIAN_FRONTEND=noninteractive
 if [ ${#missing[@]} -gt 0 ]; then
+  added_arch=0
   if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
     echo "cross-setup: adding dpkg architecture $arch"
     as_root dpkg --add-architecture "$arch"
+    added_arch=1
   fi
+  # Prints the reason and stops. An architecture this run added is taken away again while nothing
+  # of it is installed: left behind with a broken index, it would fail every later `apt-get update`
+  # on the machine (tools/setup.sh's too), not just ours.
+  give_up() {
+    printf 'cross-setup: %s\n' "$@" >&2
+    if [ $added_arch -eq 1 ] && as_root dpkg --remove-architecture "$arch" 2>/dev/null; then
+      echo "cross-setup: removed dpkg architecture $arch again; nothing was installed" >&2
+    fi
+    exit 1
+  }
   # A mirror caught mid-sync fails the update for one index ("File has unexpected size") and
-  # usually passes a bit later. If it keeps failing, go on with the lists apt has: the install
-  # below fails clearly if what we need is not in them.
+  # usually passes a bit later. If it keeps failing, go on with the lists apt has: when what we
+  # need is in them the install works; when not, the dry run below fails and names the index.
+  update_errors=""
   for try in 1 2 3; do
-    as_root apt-get update -qq && break
+    if update_errors=$(as_root apt-get update -qq 2>&1); then
+      update_errors=""
+      break
+    fi
+    printf '%s\n' "$update_errors" >&2
     if [ "$try" -lt 3 ]; then
       echo "cross-setup: apt-get update failed, retrying in 20 s" >&2
       sleep 20
@@ -80,12 +97,22 @@ if [ ${#missing[@]} -gt 0 ]; then
   # Dry run first: a version skew between the native and ARM -dev packages, or a package that is
   # not Multi-Arch: same, shows up as a removal. Upgrades of native packages to the ARM ones'
   # version are expected (Multi-Arch: same needs identical versions) and are allowed.
-  plan=$(as_root apt-get install -s --no-install-recommends "${missing[@]}")
+  if ! plan=$(as_root apt-get install -s --no-install-recommends "${missing[@]}" 2>&1); then
+    printf '%s\n' "$plan" | grep -E '^ |^E:' >&2 || true
+    broken=$(printf '%s\n' "$update_errors" | sed -n 's/^E: Failed to fetch \([^ ]*\) *\(.*\)$/  \1 (\2)/p')
+    if [ -n "$broken" ]; then
+      give_up "apt cannot install the $arch packages because the mirror serves a broken package index:" \
+        "$broken" \
+        "Without that index apt lacks the $arch builds of versions installed here for amd64, and" \
+        "multiarch (Multi-Arch: same) packages must be at identical versions for both. The fault is" \
+        "on the mirror's side; run this script again later."
+    fi
+    give_up "apt cannot install ${missing[*]} (its reasons above)"
+  fi
   removals=$(printf '%s\n' "$plan" | sed -n 's/^Remv \([^ ]*\).*/\1/p')
   if [ -n "$removals" ]; then
-    echo "cross-setup: installing ${missing[*]} would remove: $(echo $removals)" >&2
-    echo "cross-setup: refusing; install the native packages at the same version first (tools/setup.sh)" >&2
-    exit 1
+    give_up "installing ${missing[*]} would remove: $(echo $removals)" \
+      "refusing; install the native packages at the same version first (tools/setup.sh)"
   fi
   echo "cross-setup: installing ${missing[*]}"
   as_root apt-get install -y -qq --no-install-recommends "${missing[@]}"
