@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -164,8 +165,14 @@ void checkJacobians(const Model& camera, ImageSize size) {
       const Eigen::Vector3d p = 2.5 * bearing;
       Eigen::Vector2d projected = Eigen::Vector2d::Zero();
       Eigen::Matrix<double, 2, 3> d_uv_d_p;
-      Eigen::Matrix<double, 2, kN> d_uv_d_params;
+      // NaN until project() writes them: an entry it leaves unset fails allFinite() (and GCC for
+      // 32-bit ARM no longer warns that the matrices may be used uninitialized).
+      d_uv_d_p.setConstant(std::numeric_limits<double>::quiet_NaN());
+      Eigen::Matrix<double, 2, kN> d_uv_d_params =
+          Eigen::Matrix<double, 2, kN>::Constant(std::numeric_limits<double>::quiet_NaN());
       REQUIRE(camera.project(p, projected, &d_uv_d_p, &d_uv_d_params));
+      CHECK(d_uv_d_p.allFinite());
+      CHECK(d_uv_d_params.allFinite());
       const auto projectPoint = [&](const Eigen::Vector3d& q) {
         Eigen::Vector2d r = Eigen::Vector2d::Zero();
         REQUIRE(camera.project(q, r));
