@@ -179,7 +179,27 @@ TEST_CASE("backend: id map agrees with std::unordered_map under random inserts a
   CHECK(map.size() == reference.size());
 }
 
-TEST_CASE("backend: noise-free observations over 30 s give the exact trajectory") {
+// The emulated ARM run (tests/backend.cmake) leaves out the suite "long"; this short run keeps the
+// estimator itself, keyframes and marginalisation included, checked on every architecture.
+TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory") {
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.0;
+  sc.duration_s = 4.0;
+  sc.motion_scale = 2.5;  // faster motion: more keyframes in a short run
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  const RunResult result = run(rig, seq);
+  CHECK(result.resets == 0);
+  CHECK(result.lost == 0);
+  CHECK(result.keyframes > 7);  // more than the window holds: marginalisation has happened
+  const auto [max_t, max_r] = maxPoseError(result.T_world_body, seq.T_world_body);
+  MESSAGE("noise-free 4 s: max error " << max_t * 1000 << " mm, " << max_r << " deg, " << result.keyframes
+                                       << " keyframes");
+  CHECK(max_t < 1e-3);  // the 30 s case's bounds
+  CHECK(max_r < 0.01);
+}
+
+TEST_CASE("backend: noise-free observations over 30 s give the exact trajectory" * doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.0;
@@ -196,7 +216,7 @@ TEST_CASE("backend: noise-free observations over 30 s give the exact trajectory"
   CHECK(max_r < 0.01);
 }
 
-TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) below 0.5 cm") {
+TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) below 0.5 cm" * doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
@@ -216,7 +236,7 @@ TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) bel
   CHECK(result.min_prior_eigenvalue > -1e-12);
 }
 
-TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping it (information moved, not lost)") {
+TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping it (information moved, not lost)" * doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
@@ -266,7 +286,7 @@ TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping i
   CHECK(max_diff_deg < 1e-3);
 }
 
-TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory stays continuous and finite") {
+TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory stays continuous and finite" * doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.3;
@@ -311,7 +331,7 @@ TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory 
   CHECK(rte.stats.rmse < 0.005);
 }
 
-TEST_CASE("backend: TUM-VI fisheye rig (kb4) with the shipped Gauss-Newton setting") {
+TEST_CASE("backend: TUM-VI fisheye rig (kb4) with the shipped Gauss-Newton setting" * doctest::test_suite("long")) {
   const StereoRig rig = synth::tumviRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
