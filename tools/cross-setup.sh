@@ -101,11 +101,11 @@ if [ ${#missing[@]} -gt 0 ]; then
     printf '%s\n' "$plan" | grep -E '^ |^E:' >&2 || true
     broken=$(printf '%s\n' "$update_errors" | sed -n 's/^E: Failed to fetch \([^ ]*\) *\(.*\)$/  \1 (\2)/p')
     if [ -n "$broken" ]; then
-      give_up "apt cannot install the $arch packages because the mirror serves a broken package index:" \
+      give_up "apt cannot install the $arch packages because it could not fetch this package index:" \
         "$broken" \
         "Without that index apt lacks the $arch builds of versions installed here for amd64, and" \
-        "multiarch (Multi-Arch: same) packages must be at identical versions for both. The fault is" \
-        "on the mirror's side; run this script again later."
+        "multiarch (Multi-Arch: same) packages must be at identical versions for both. A size or hash" \
+        "mismatch means the mirror serves a stale or half-synced file: run this script again later."
     fi
     give_up "apt cannot install ${missing[*]} (its reasons above)"
   fi
