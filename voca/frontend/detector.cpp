@@ -215,6 +215,14 @@ int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existi
       std::uint8_t* bright = row_buffers_.data();
       std::uint8_t* dark = bright + g;
       for (int y = y0; y < y1; ++y) {
+        if (radius2 > 0.f) {
+          // A row segment wholly outside the mask is skipped. Exact in double, with a margin far
+          // above the float rounding of the per-pixel test below, so no pixel it would take is lost.
+          const double dx = std::max({0.0, x0 - static_cast<double>(params.safe_center.x()),
+                                      static_cast<double>(params.safe_center.x()) - (x1 - 1)});
+          const double dy = y - static_cast<double>(params.safe_center.y());
+          if (dx * dx + dy * dy > 1.001 * static_cast<double>(radius2) + 1.0) continue;
+        }
         const std::uint8_t* row = &image(x0, y);
         // The cheap compass test skips the rows of flat areas; textured rows get the full test.
         if (!compassRow(row, image.stride, n, static_cast<std::uint8_t>(lowest))) continue;
