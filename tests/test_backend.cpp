@@ -199,6 +199,48 @@ TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory")
   CHECK(max_r < 0.01);
 }
 
+TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.0;
+  sc.duration_s = 4.0;
+  sc.motion_scale = 2.5;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  // Every third track loses its left views (right-only, as in a right camera's non-overlapping
+  // area); the control drops those tracks altogether.
+  SyntheticObservations right_only = seq, dropped = seq;
+  const auto is_moved = [](const KeypointObservation& o) { return o.track_id % 3 == 0; };
+  int moved_views = 0;
+  for (std::size_t k = 0; k < seq.frames.size(); ++k) {
+    std::erase_if(right_only.frames[k].observations[0], is_moved);
+    std::erase_if(dropped.frames[k].observations[0], is_moved);
+    moved_views += static_cast<int>(std::erase_if(dropped.frames[k].observations[1], is_moved));
+  }
+  REQUIRE(moved_views > 1000);
+  const auto inliers = [&](const SyntheticObservations& s) {
+    VoEstimator estimator({}, rig);
+    long total = 0;
+    std::vector<SE3d> poses;
+    for (const TrackedStereoFrame& frame : s.frames) {
+      const PoseEstimate& e = estimator.process(frame);
+      CHECK(e.state != TrackingState::kReset);
+      total += e.num_inliers;
+      poses.push_back(e.T_world_body);
+    }
+    return std::pair{total, poses};
+  };
+  const auto [with_right_only, poses] = inliers(right_only);
+  const auto [without, unused] = inliers(dropped);
+  MESSAGE("inlier observations: " << with_right_only << " with right-only tracks, " << without << " without; "
+                                  << moved_views << " right-only views offered");
+  // Most right-only views end up attached to landmarks (a track needs two views with baseline
+  // before it is triangulated, so not all of them).
+  CHECK(with_right_only - without > moved_views / 2);
+  const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
+  CHECK(max_t < 1e-3);  // still exact: the right-only landmarks are consistent
+  CHECK(max_r < 0.01);
+}
+
 TEST_CASE("backend: noise-free observations over 30 s give the exact trajectory" * doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;

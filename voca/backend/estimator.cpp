@@ -264,14 +264,19 @@ int VoEstimator::triangulateNew(int frame) {
                                      [](const Observation& o, std::uint64_t key) { return o.id < key; });
     return it != list.end() && it->id == id ? &*it : nullptr;
   };
-  int created = 0;
-  for (const Observation& o : f.obs[0]) {
-    if (free_landmarks_.empty()) break;
-    if (id_to_landmark_.find(o.id) >= 0) continue;
-    Eigen::Vector3d b0;
-    if (!cameras_[0].unproject(o.px, b0)) continue;
-    // The other view with the widest baseline: this frame's right camera or any camera of another
-    // frame in the window.
+  enum class Outcome { kCreated, kSkipped, kFull };
+  // A track seen in this frame's camera ref_cam: triangulated against the view with the widest
+  // baseline and stored, like every landmark, as a bearing and inverse distance from this frame's
+  // left camera. A right-only track (the frontend's detection_nonoverlap) has no view there to
+  // anchor it, so the bearing is a free parameter fixed by its views.
+  const auto create = [&](const Observation& o, int ref_cam) {
+    if (free_landmarks_.empty()) return Outcome::kFull;
+    if (id_to_landmark_.find(o.id) >= 0) return Outcome::kSkipped;
+    Eigen::Vector3d b_ref;
+    if (!cameras_[static_cast<std::size_t>(ref_cam)].unproject(o.px, b_ref)) return Outcome::kSkipped;
+    const SE3d& T_c_ref = T_cam0_cam_[static_cast<std::size_t>(ref_cam)];
+    // The other view with the widest baseline: another camera of this frame or any camera of
+    // another frame in the window.
     double best_baseline = config_.min_triangulation_dist_m;
     bool found = false;
     SE3d T_c_other;
@@ -281,11 +286,11 @@ int VoEstimator::triangulateNew(int frame) {
       const Frame& fg = frames_[static_cast<std::size_t>(g)];
       if (!fg.active) continue;
       for (int c = 0; c < 2; ++c) {
-        if (g == frame && c == 0) continue;
+        if (g == frame && c == ref_cam) continue;
         const Observation* other = find(fg.obs[static_cast<std::size_t>(c)], o.id);
         if (other == nullptr) continue;
         const SE3d T = T_c_w * fg.T_w_c * T_cam0_cam_[static_cast<std::size_t>(c)];
-        const double baseline = T.translation().norm();
+        const double baseline = (T.translation() - T_c_ref.translation()).norm();
         if (baseline >= best_baseline) {
           best_baseline = baseline;
           found = true;
@@ -295,29 +300,33 @@ int VoEstimator::triangulateNew(int frame) {
         }
       }
     }
-    if (!found) continue;
-    Eigen::Vector3d b1;
-    if (!cameras_[static_cast<std::size_t>(other_cam)].unproject(other_px, b1)) continue;
-    // Closest points of the two rays d0 b0 and t + d1 R b1 (least squares in d0, d1).
+    if (!found) return Outcome::kSkipped;
+    Eigen::Vector3d b_other;
+    if (!cameras_[static_cast<std::size_t>(other_cam)].unproject(other_px, b_other)) return Outcome::kSkipped;
+    // Closest points of the rays o_ref + d0 R_ref b_ref and o_other + d1 R_other b_other (least
+    // squares in d0, d1), all in this frame's left-camera coordinates.
+    const Eigen::Vector3d ray_ref = T_c_ref.so3() * b_ref;
     Eigen::Matrix<double, 3, 2> A;
-    A.col(0) = b0;
-    A.col(1) = -(T_c_other.so3() * b1);
+    A.col(0) = ray_ref;
+    A.col(1) = -(T_c_other.so3() * b_other);
     const Eigen::Matrix2d AtA = A.transpose() * A;
     const double det = AtA.determinant();
-    if (!(det > 1e-12)) continue;  // parallel rays
-    const Eigen::Vector2d d = AtA.inverse() * (A.transpose() * T_c_other.translation());
-    if (!(d(0) > 0.0 && d(1) > 0.0)) continue;
-    const double rho = 1.0 / d(0);
-    if (!(rho >= config_.min_inverse_distance && rho <= config_.max_inverse_distance)) continue;
+    if (!(det > 1e-12)) return Outcome::kSkipped;  // parallel rays
+    const Eigen::Vector2d d = AtA.inverse() * (A.transpose() * (T_c_other.translation() - T_c_ref.translation()));
+    if (!(d(0) > 0.0 && d(1) > 0.0)) return Outcome::kSkipped;
+    const Eigen::Vector3d p = T_c_ref.translation() + d(0) * ray_ref;
+    const double rho = 1.0 / p.norm();
+    if (!(rho >= config_.min_inverse_distance && rho <= config_.max_inverse_distance)) return Outcome::kSkipped;
 
     const int index = free_landmarks_.back();
     Landmark& lm = landmarks_[static_cast<std::size_t>(index)];
     lm.id = o.id;
     lm.host = frame;
-    lm.s = stereographicProject(b0);
+    lm.s = stereographicProject(p);
     lm.rho = rho;
     lm.mask = 0;
-    // Every view of this track in the window, each checked against the triangulated point.
+    // Every view of this track in the window, each checked against the triangulated point (the
+    // left view that defines the bearing is exact by construction).
     for (int g = 0; g < kMaxWindowFrames; ++g) {
       const Frame& fg = frames_[static_cast<std::size_t>(g)];
       if (!fg.active) continue;
@@ -333,14 +342,26 @@ int VoEstimator::triangulateNew(int frame) {
         }
       }
     }
-    if (numObs(lm) < 2) continue;
-    if (!id_to_landmark_.insert(lm.id, index)) break;
+    if (numObs(lm) < 2) return Outcome::kSkipped;
+    if (!id_to_landmark_.insert(lm.id, index)) return Outcome::kFull;
     lm.alive = true;
     lm.alive_pos = static_cast<int>(alive_.size());
     alive_.push_back(index);
     free_landmarks_.pop_back();
     ++num_landmarks_;
-    ++created;
+    return Outcome::kCreated;
+  };
+  int created = 0;
+  for (const Observation& o : f.obs[0]) {
+    const Outcome outcome = create(o, 0);
+    if (outcome == Outcome::kFull) return created;
+    created += outcome == Outcome::kCreated;
+  }
+  for (const Observation& o : f.obs[1]) {
+    if (find(f.obs[0], o.id) != nullptr) continue;  // seen on the left: that view decides
+    const Outcome outcome = create(o, 1);
+    if (outcome == Outcome::kFull) return created;
+    created += outcome == Outcome::kCreated;
   }
   return created;
 }
@@ -699,7 +720,7 @@ int VoEstimator::chooseKeyframeToMarginalize(int newest) const {
 void VoEstimator::prepareMarginalization(int frame) {
   Frame& fm = frames_[static_cast<std::size_t>(frame)];
   // Landmarks hosted here that the newest frame still tracks move to another keyframe that sees
-  // them in its left camera (kept alive, where Basalt loses them); the others are marginalised with
+  // them, in its left camera if one does (kept alive, where Basalt loses them); the others are marginalised with
   // the frame, so their information on the window stays in the prior.
   int newest = -1;
   for (int g = 0; g < kMaxWindowFrames; ++g) {
@@ -716,11 +737,14 @@ void VoEstimator::prepareMarginalization(int frame) {
       scratch_landmarks_.push_back(i);
       continue;
     }
+    // The newest keyframe with a left view, else (right-only tracks) with a right view.
     int new_host = -1;
-    for (int g = 0; g < kMaxWindowFrames; ++g) {
-      const Frame& fg = frames_[static_cast<std::size_t>(g)];
-      if (g == frame || !fg.active || !fg.keyframe || (lm.mask & (1u << maskBit(g, 0))) == 0) continue;
-      if (new_host < 0 || fg.sequence > frames_[static_cast<std::size_t>(new_host)].sequence) new_host = g;
+    for (int cam = 0; cam < 2 && new_host < 0; ++cam) {
+      for (int g = 0; g < kMaxWindowFrames; ++g) {
+        const Frame& fg = frames_[static_cast<std::size_t>(g)];
+        if (g == frame || !fg.active || !fg.keyframe || (lm.mask & (1u << maskBit(g, cam))) == 0) continue;
+        if (new_host < 0 || fg.sequence > frames_[static_cast<std::size_t>(new_host)].sequence) new_host = g;
+      }
     }
     bool moved = false;
     if (new_host >= 0) {
