@@ -258,7 +258,8 @@ TEST_CASE("backend: noise-free observations over 30 s give the exact trajectory"
   CHECK(max_r < 0.01);
 }
 
-TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) below 0.5 cm" * doctest::test_suite("long")) {
+TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) below 0.5 cm" *
+          doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
@@ -278,7 +279,8 @@ TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) bel
   CHECK(result.min_prior_eigenvalue > -1e-12);
 }
 
-TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping it (information moved, not lost)" * doctest::test_suite("long")) {
+TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping it (information moved, not lost)" *
+          doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
@@ -328,7 +330,8 @@ TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping i
   CHECK(max_diff_deg < 1e-3);
 }
 
-TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory stays continuous and finite" * doctest::test_suite("long")) {
+TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory stays continuous and finite" *
+          doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.3;

@@ -103,9 +103,9 @@ TEST_CASE("patch kernels: template sampling, native == portable, and both match 
       const float* base = &view(ix, iy);
       std::array<float, PatchPattern::kMaxSize> nv, ntx, nty, nth, pv, ptx, pty, pth;
       const float n_sum = kernels::sampleTemplate<simd4::Native>(base, view.stride, *pattern, fx, fy, nv.data(),
-                                                                  ntx.data(), nty.data(), nth.data());
+                                                                 ntx.data(), nty.data(), nth.data());
       const float p_sum = kernels::sampleTemplate<simd4::Portable>(base, view.stride, *pattern, fx, fy, pv.data(),
-                                                                    ptx.data(), pty.data(), pth.data());
+                                                                   ptx.data(), pty.data(), pth.data());
       CHECK(sameBits(n_sum, p_sum));
       double reference_sum = 0.0;
       for (int i = 0; i < pattern->size; ++i) {

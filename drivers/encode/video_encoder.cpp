@@ -72,7 +72,8 @@ std::string readWholeFile(const std::filesystem::path& path) {
 std::string withReproducibleX264Asm(const std::string& params) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
   if (params.find("asm") == std::string::npos && __builtin_cpu_supports("avx512f")) {
-    const std::string avx2_level = "asm=MMX2,SSE,SSE2,SSE2Fast,SSE3,SSSE3,SSE4.1,SSE4.2,AVX,FMA3,BMI1,BMI2,AVX2,LZCNT,Cache64";
+    const std::string avx2_level =
+        "asm=MMX2,SSE,SSE2,SSE2Fast,SSE3,SSSE3,SSE4.1,SSE4.2,AVX,FMA3,BMI1,BMI2,AVX2,LZCNT,Cache64";
     return params.empty() ? avx2_level : params + ":" + avx2_level;
   }
 #endif

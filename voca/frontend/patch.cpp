@@ -59,8 +59,8 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     const int ix = static_cast<int>(center.x()), iy = static_cast<int>(center.y());
     const float* base = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
     sum = patch_kernels::sampleTemplate<simd4::Native>(base, image.stride, pattern, center.x() - static_cast<float>(ix),
-                                                       center.y() - static_cast<float>(iy), value.data(), jpix[0].data(),
-                                                       jpix[1].data(), jpix[2].data());
+                                                       center.y() - static_cast<float>(iy), value.data(),
+                                                       jpix[0].data(), jpix[1].data(), jpix[2].data());
     count = n;
   } else {
     for (int i = 0; i < n; ++i) {
@@ -180,7 +180,8 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
     float inc[3];
     const float tx = T.translation().x(), ty = T.translation().y();
-    if (tmpl.all_points_valid && canSample(target, tx - reach, ty - reach) && canSample(target, tx + reach, ty + reach)) {
+    if (tmpl.all_points_valid && canSample(target, tx - reach, ty - reach) &&
+        canSample(target, tx + reach, ty + reach)) {
       // Every point inside: one pass samples the target and forms H^-1 J^T r directly, as
       // sum_i step_i (I_i / mean - value_i) = (sum_i step_i I_i) / mean - sum_i step_i value_i.
       float dots[3];

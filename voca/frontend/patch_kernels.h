@@ -47,9 +47,10 @@ float sampleTemplate(const float* base, std::ptrdiff_t stride, const PatchPatter
     const F gx = V::mul(half, V::add(V::add(V::add(V::mul(w00, V::sub(a[2], a[0])), V::mul(w10, V::sub(a[3], a[1]))),
                                             V::mul(w01, V::sub(b[2], b[0]))),
                                      V::mul(w11, V::sub(b[3], b[1]))));
-    const F gy = V::mul(half, V::add(V::add(V::add(V::mul(w00, V::sub(b[1], above0)), V::mul(w10, V::sub(b[2], above1))),
-                                            V::mul(w01, V::sub(below0, a[1]))),
-                                     V::mul(w11, V::sub(below1, a[2]))));
+    const F gy =
+        V::mul(half, V::add(V::add(V::add(V::mul(w00, V::sub(b[1], above0)), V::mul(w10, V::sub(b[2], above1))),
+                                   V::mul(w01, V::sub(below0, a[1]))),
+                            V::mul(w11, V::sub(below1, a[2]))));
     // d I(centre + R(theta) q + t) / d theta at identity = -gx qy + gy qx.
     const F qx = V::load(pattern.x.data() + i), qy = V::load(pattern.y.data() + i);
     V::store(value + i, v);
@@ -66,8 +67,7 @@ float sampleTemplate(const float* base, std::ptrdiff_t stride, const PatchPatter
 // returns their sum; when step is not null, also accumulates dots[r] = sum_i step[r][i] sample_i.
 template <class V>
 float sampleWarped(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c, float s,
-                   float tx, float ty, float* out, const std::array<float, PatchPattern::kMaxSize>* step,
-                   float* dots) {
+                   float tx, float ty, float* out, const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
   using F = typename V::F;
   const F vc = V::set1(c), vs = V::set1(s), vtx = V::set1(tx), vty = V::set1(ty);
   const F vstride = V::set1(static_cast<float>(stride));

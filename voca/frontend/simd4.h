@@ -77,11 +77,10 @@ struct Sse2 {
   static F sub(F a, F b) { return _mm_sub_ps(a, b); }
   static F mul(F a, F b) { return _mm_mul_ps(a, b); }
   static F truncate(F a) { return _mm_cvtepi32_ps(_mm_cvttps_epi32(a)); }
-  static void toInt(F a, std::int32_t* out) {
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(a));
-  }
+  static void toInt(F a, std::int32_t* out) { _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(a)); }
   static float sum(F a) {
-    const F pairs = _mm_add_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(2, 2, 0, 0)), _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 3, 1, 1)));
+    const F pairs =
+        _mm_add_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(2, 2, 0, 0)), _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 3, 1, 1)));
     return _mm_cvtss_f32(_mm_add_ss(pairs, _mm_movehl_ps(pairs, pairs)));
   }
   static F load2(const float* p) { return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p))); }
