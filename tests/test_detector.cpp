@@ -236,3 +236,37 @@ TEST_CASE("detector: thresholds at the ends of the 8-bit range") {
   detector.detect(image.view(), {}, params, 4, found);
   CHECK(found.size() == 1);
 }
+
+TEST_CASE("detector: blocked cells get no corner; the others the same as without the mask") {
+  // Blocking a cell must act exactly like an existing point in it (the frontend's right-only
+  // detection blocks the cells the left camera sees).
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> grey(0, 255);
+  const int w = 160, h = 120, grid = 40, cells_x = 4, cells_y = 3;
+  GrayImage image(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) image(x, y) = static_cast<std::uint8_t>(grey(rng));
+  std::vector<std::uint8_t> blocked(cells_x * cells_y, 0);
+  std::vector<Eigen::Vector2f> existing;
+  for (int cell : {0, 5, 6, 11}) {
+    blocked[static_cast<std::size_t>(cell)] = 1;
+    existing.emplace_back(static_cast<float>((cell % cells_x) * grid + 20),
+                          static_cast<float>((cell / cells_x) * grid + 20));
+  }
+  GridDetector detector(w, h, grid);
+  std::vector<Eigen::Vector2f> with_mask, with_points;
+  with_mask.reserve(64);
+  with_points.reserve(64);
+  const int added = detector.detect(image.view(), {}, DetectorParams{}, 64, with_mask, blocked);
+  detector.detect(image.view(), existing, DetectorParams{}, 64, with_points);
+  CHECK(added == 8);  // noise has corners in every free cell
+  REQUIRE(with_mask.size() == with_points.size());
+  for (std::size_t i = 0; i < with_mask.size(); ++i) {
+    CHECK(with_mask[i] == with_points[i]);
+    const int cell = static_cast<int>(with_mask[i].y()) / grid * cells_x + static_cast<int>(with_mask[i].x()) / grid;
+    CHECK(blocked[static_cast<std::size_t>(cell)] == 0);
+  }
+  // A mask for another grid is an error, not a silent misreading.
+  const std::vector<std::uint8_t> wrong(5, 0);
+  CHECK_THROWS_AS(detector.detect(image.view(), {}, DetectorParams{}, 64, with_mask, wrong), std::invalid_argument);
+}

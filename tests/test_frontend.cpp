@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "tests/test_frontend_support.h"
 #include "voca/frontend/detector.h"
@@ -88,9 +89,8 @@ TEST_CASE("pyramid: presmooth applies [1 2 1]/4 to level 0: ramps and constants 
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) CHECK(smooth.level(0)(x, y) == 90.f);
   // A one-pixel checkerboard (the Nyquist frequency) has zero response: the mean remains.
-  const GrayImage checker = renderArbitrary(w, h, [](double x, double y) {
-    return (static_cast<int>(x) + static_cast<int>(y)) % 2 == 0 ? 100.0 : 200.0;
-  });
+  const GrayImage checker = renderArbitrary(
+      w, h, [](double x, double y) { return (static_cast<int>(x) + static_cast<int>(y)) % 2 == 0 ? 100.0 : 200.0; });
   smooth.build(checker.view());
   for (int y = 1; y < h - 1; ++y)
     for (int x = 1; x < w - 1; ++x) CHECK(smooth.level(0)(x, y) == 150.f);
@@ -351,6 +351,50 @@ TEST_CASE("frontend: tracks a translating plane with persistent ids, stereo matc
   // Drift over 5 frames of 8-bit images: median well below 0.05 px.
   CHECK(errors[errors.size() / 2] < 0.05);
   CHECK(errors[errors.size() * 9 / 10] < 0.1);
+}
+
+TEST_CASE("frontend: detection_nonoverlap adds right-only tracks where the left camera does not see") {
+  // 60 px of disparity at the 2 m matching depth: the right image's last ~80 px (60 px plus the
+  // left image's 19 px detection border) show what the left camera does not, two 40 px grid columns.
+  PlaneSequence seq{WaveTexture(5), Eigen::Vector2d(1.7, -0.8)};
+  seq.disparity = 60.0;
+  const StereoRig rig =
+      voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.disparity * seq.kDepth / seq.kFocal);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kNone;
+  for (const bool nonoverlap : {false, true}) {
+    config.detection_nonoverlap = nonoverlap;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    std::map<std::uint64_t, Eigen::Vector2f> right_only_start;
+    int right_only_tracked = 0;
+    for (int k = 0; k < 6; ++k) {
+      seq.render(k);
+      frontend.track(seq.input(k), frame, stats);
+      std::set<std::uint64_t> left_ids;
+      for (const auto& o : frame.observations[0]) left_ids.insert(o.track_id);
+      for (const auto& o : frame.observations[1]) {
+        if (left_ids.count(o.track_id) != 0) continue;
+        if (k == 0) {
+          right_only_start[o.track_id] = o.px;
+          CHECK(o.px.x() >= 240.f);  // only in the two non-overlapping grid columns
+        } else if (const auto it = right_only_start.find(o.track_id); it != right_only_start.end()) {
+          // Tracked over time in the right image like any point: it moves with the texture.
+          CHECK((o.px.cast<double>() - (it->second.cast<double>() + seq.flow * k)).norm() < 0.1);
+          right_only_tracked += k == 5;
+        }
+      }
+      if (k == 0) CHECK(stats.detected_right_only == static_cast<int>(right_only_start.size()));
+    }
+    if (nonoverlap) {
+      CHECK(right_only_start.size() >= 6);  // 2 columns x 6 rows of cells, minus border-clipped ones
+      CHECK(right_only_tracked >= static_cast<int>(right_only_start.size()) * 2 / 3);
+    } else {
+      CHECK(right_only_start.empty());
+      CHECK(stats.detected_right_only == 0);
+    }
+  }
 }
 
 TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames bridged") {

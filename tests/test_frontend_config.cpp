@@ -55,6 +55,8 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
   CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
   CHECK(tumvi.frontend.pattern == 52);
+  CHECK(tumvi.frontend.detection_nonoverlap);
+  CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"presmooth": true}})"), "x").frontend.presmooth);

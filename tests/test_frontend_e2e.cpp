@@ -355,22 +355,29 @@ TEST_CASE("e2e frontend: micro EuRoC at 500 kbit/s keeps >= 80 % of the raw run'
   CHECK(quantile(prior, 0.9) < quantile(plain, 0.9));
 }
 
-TEST_CASE("e2e frontend: shipped EuRoC config equals the official VOCA release's optical-flow values") {
-  const auto file = voca::test::sharedData("voca_configs/data/euroc/euroc_config_vo.json");
-  if (!file) return;
-  std::ifstream in(*file);
-  const nlohmann::json official = nlohmann::json::parse(in).at("value0");
-  const FrontendConfig ours = loadConfig(std::filesystem::path(VOCA_SOURCE_DIR) / "configs/euroc_vo.json").frontend;
-  CHECK(official.at("config.optical_flow_detection_grid_size").get<int>() == ours.grid_size_px);
-  CHECK(official.at("config.optical_flow_levels").get<int>() == ours.pyramid_levels);
-  CHECK(official.at("config.optical_flow_max_iterations").get<int>() == ours.max_iterations);
-  CHECK(official.at("config.optical_flow_pattern").get<int>() == ours.pattern);
-  CHECK(official.at("config.optical_flow_max_recovered_dist2").get<double>() == ours.max_recovered_dist2_px2);
-  CHECK(official.at("config.optical_flow_epipolar_error").get<double>() == ours.epipolar_error);
-  CHECK(official.at("config.optical_flow_matching_default_depth").get<double>() == ours.matching_default_depth_m);
-  CHECK(official.at("config.optical_flow_image_safe_radius").get<double>() == ours.image_safe_radius_px);
-  CHECK(official.at("config.optical_flow_detection_max_threshold").get<int>() == ours.detection_max_threshold);
-  CHECK(official.at("config.optical_flow_detection_min_threshold").get<int>() == ours.detection_min_threshold);
-  CHECK(official.at("config.optical_flow_matching_guess_type").get<std::string>() == "REPROJ_FIX_DEPTH");
-  CHECK(ours.matching_guess == StereoGuess::kFixedDepth);
+TEST_CASE("e2e frontend: shipped EuRoC and TUM-VI configs equal the official VOCA release's optical-flow values") {
+  for (const auto& [official_file, ours_file] :
+       {std::pair{"voca_configs/data/euroc/euroc_config_vo.json", "configs/euroc_vo.json"},
+        std::pair{"voca_configs/data/tum/tumvi_512_config_vo.json", "configs/tumvi_vo.json"}}) {
+    const auto file = voca::test::sharedData(official_file);
+    if (!file) return;
+    INFO(official_file);
+    std::ifstream in(*file);
+    const nlohmann::json official = nlohmann::json::parse(in).at("value0");
+    const FrontendConfig ours = loadConfig(std::filesystem::path(VOCA_SOURCE_DIR) / ours_file).frontend;
+    CHECK(official.at("config.optical_flow_detection_grid_size").get<int>() == ours.grid_size_px);
+    CHECK(official.at("config.optical_flow_levels").get<int>() == ours.pyramid_levels);
+    CHECK(official.at("config.optical_flow_max_iterations").get<int>() == ours.max_iterations);
+    CHECK(official.at("config.optical_flow_pattern").get<int>() == ours.pattern);
+    CHECK(official.at("config.optical_flow_max_recovered_dist2").get<double>() == ours.max_recovered_dist2_px2);
+    CHECK(official.at("config.optical_flow_epipolar_error").get<double>() == ours.epipolar_error);
+    CHECK(official.at("config.optical_flow_matching_default_depth").get<double>() == ours.matching_default_depth_m);
+    CHECK(official.at("config.optical_flow_image_safe_radius").get<double>() == ours.image_safe_radius_px);
+    CHECK(official.at("config.optical_flow_detection_max_threshold").get<int>() == ours.detection_max_threshold);
+    CHECK(official.at("config.optical_flow_detection_min_threshold").get<int>() == ours.detection_min_threshold);
+    CHECK(official.at("config.optical_flow_detection_nonoverlap").get<bool>() == ours.detection_nonoverlap);
+    const std::string guess = official.at("config.optical_flow_matching_guess_type").get<std::string>();
+    CHECK(ours.matching_guess == (guess == "REPROJ_AVG_DEPTH" ? StereoGuess::kAverageDepth : StereoGuess::kFixedDepth));
+    CHECK((guess == "REPROJ_AVG_DEPTH" || guess == "REPROJ_FIX_DEPTH"));
+  }
 }

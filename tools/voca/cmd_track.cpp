@@ -121,7 +121,7 @@ struct Totals {
   std::vector<double> left_points, right_points, ms, cpu_ms;
   std::vector<double> plain_dist, prior_dist;
   long previous = 0, kept = 0, rescued = 0, consensus = 0, tracked_plain = 0, tracked_prior = 0, with_vector = 0;
-  long detected = 0, stereo_matched = 0, epipolar = 0;
+  long detected = 0, detected_right_only = 0, stereo_matched = 0, epipolar = 0;
   int bridged_frames = 0;
   int frames = 0;
 };
@@ -179,6 +179,7 @@ int runTrack(const TrackOptions& opts) {
       totals.with_vector += t.with_vector;
     }
     totals.detected += stats.detected;
+    totals.detected_right_only += stats.detected_right_only;
     totals.stereo_matched += stats.stereo_matched;
     totals.epipolar += stats.epipolar_rejected;
     totals.bridged_frames += stats.bridged[0] || stats.bridged[1];
@@ -226,6 +227,10 @@ int runTrack(const TrackOptions& opts) {
   fmt::print("new points: {:.1f} per frame, {:.1f} % matched in the right image; epipolar rejections: {}\n",
              static_cast<double>(totals.detected) / totals.frames, pct(totals.stereo_matched, totals.detected),
              totals.epipolar);
+  if (config.detection_nonoverlap) {
+    fmt::print("right-only points (detection_nonoverlap): {:.1f} new per frame\n",
+               static_cast<double>(totals.detected_right_only) / totals.frames);
+  }
   if (!totals.prior_dist.empty()) {
     fmt::print(
         "guess to converged distance (px, {} kept tracks with a vector): previous position median {:.3f} p90 {:.3f}; "
@@ -248,7 +253,8 @@ const bool registered = voca::cli::registerCommand({
       auto opts = std::make_shared<TrackOptions>();
       app.add_option("input", opts->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
       app.add_option("--calib", opts->calib, "Calibration file (default: the one found with the dataset)");
-      app.add_option("--config", opts->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
+      app.add_option("--config", opts->config,
+                     "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
       app.add_option("--mode", opts->mode,
                      "Prior mode: none, mv, of_then_mv, mv_then_of, mv_parallel_of (overrides the config)");
       app.add_option("--overlay", opts->overlay, "Write the left video with the tracks drawn to this .mp4");

@@ -92,6 +92,8 @@ FrontendConfig parseFrontendConfig(const json& section, const std::string& conte
       c.consensus_tolerance_px2 = readReal(value, name);
     } else if (key == "bridge_iframes") {
       c.bridge_iframes = readBool(value, name);
+    } else if (key == "detection_nonoverlap") {
+      c.detection_nonoverlap = readBool(value, name);
     } else if (key == "presmooth") {
       c.presmooth = readBool(value, name);
     } else {
@@ -99,7 +101,7 @@ FrontendConfig parseFrontendConfig(const json& section, const std::string& conte
           "{}: unknown key (known: grid_size_px, pyramid_levels, max_iterations, pattern, max_recovered_dist2_px2, "
           "epipolar_error, matching_guess, matching_default_depth_m, image_safe_radius_px, detection_max_threshold, "
           "detection_min_threshold, detection_border_px, prior_mode, consensus_tolerance_px2, bridge_iframes, "
-          "presmooth)",
+          "detection_nonoverlap, presmooth)",
           name));
     }
   }

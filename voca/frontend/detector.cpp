@@ -171,7 +171,7 @@ GridDetector::GridDetector(int max_width, int max_height, int grid_size_px) : gr
 }
 
 int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existing, const DetectorParams& params,
-                         int max_new, std::vector<Eigen::Vector2f>& out) {
+                         int max_new, std::vector<Eigen::Vector2f>& out, std::span<const std::uint8_t> blocked) {
   const int g = grid_size_px_;
   const int cells_x = (image.width + g - 1) / g;
   const int cells_y = (image.height + g - 1) / g;
@@ -179,7 +179,14 @@ int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existi
     throw std::length_error("GridDetector: image larger than the capacity");
   }
   if (params.max_threshold < 0) throw std::invalid_argument("GridDetector: max_threshold must not be negative");
-  std::fill(occupied_.begin(), occupied_.begin() + cells_x * cells_y, std::uint8_t{0});
+  if (!blocked.empty() && blocked.size() != static_cast<std::size_t>(cells_x) * static_cast<std::size_t>(cells_y)) {
+    throw std::invalid_argument("GridDetector: the blocked-cell mask does not match the image's grid");
+  }
+  if (blocked.empty()) {
+    std::fill(occupied_.begin(), occupied_.begin() + cells_x * cells_y, std::uint8_t{0});
+  } else {
+    std::copy(blocked.begin(), blocked.end(), occupied_.begin());
+  }
   for (const Eigen::Vector2f& p : existing) {
     const int cx = static_cast<int>(std::floor((p.x() + 0.5f) / static_cast<float>(g)));
     const int cy = static_cast<int>(std::floor((p.y() + 0.5f) / static_cast<float>(g)));

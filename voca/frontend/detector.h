@@ -37,8 +37,11 @@ class GridDetector {
 
   // Appends at most max_new corners (pixel coordinates) to `out`; returns how many were added.
   // `out` must have capacity for them (reserve once) so that appending does not allocate.
+  // `blocked`, when not empty, holds one byte per cell (row-major, cellsX() x cellsY() of the image):
+  // non-zero cells get no corner.
   int detect(GrayView image, std::span<const Eigen::Vector2f> existing, const DetectorParams& params, int max_new,
-             std::vector<Eigen::Vector2f>& out);
+             std::vector<Eigen::Vector2f>& out, std::span<const std::uint8_t> blocked = {});
+  int gridSize() const { return grid_size_px_; }
 
  private:
   int grid_size_px_ = 0;

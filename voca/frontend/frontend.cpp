@@ -17,7 +17,7 @@ void FrontendStats::reserve(std::size_t max_points) {
 void FrontendStats::clear() {
   temporal = {};
   bridged = {false, false};
-  detected = stereo_matched = epipolar_rejected = num_left = num_right = 0;
+  detected = detected_right_only = stereo_matched = epipolar_rejected = num_left = num_right = 0;
   guess_dist_plain_px.clear();
   guess_dist_prior_px.clear();
   time_ms = 0.0;
@@ -54,7 +54,8 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   for (int c = 0; c < 2; ++c) {
     cameras_model_[static_cast<std::size_t>(c)] = rig.cameras[static_cast<std::size_t>(c)].camera;
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
-    for (ImagePyramid& pyramid : cam.pyramids) pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth);
+    for (ImagePyramid& pyramid : cam.pyramids)
+      pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth);
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
@@ -82,6 +83,41 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   detector_params_.safe_center = Eigen::Vector2f(static_cast<float>(intrinsics[2]), static_cast<float>(intrinsics[3]));
   detector_ = GridDetector(max_width, max_height, config_.grid_size_px);
   new_points_.reserve(static_cast<std::size_t>(max_points_));
+  right_detector_params_ = detector_params_;
+  const std::vector<double> right_intrinsics = rig.cameras[1].camera.params();
+  right_detector_params_.safe_center =
+      Eigen::Vector2f(static_cast<float>(right_intrinsics[2]), static_cast<float>(right_intrinsics[3]));
+  if (config_.detection_nonoverlap) computeRightOverlap(rig);
+}
+
+void KltFrontend::computeRightOverlap(const StereoRig& rig) {
+  const int g = config_.grid_size_px;
+  const int width = rig.cameras[1].width, height = rig.cameras[1].height;
+  const int cells_x = (width + g - 1) / g, cells_y = (height + g - 1) / g;
+  right_overlap_.assign(static_cast<std::size_t>(cells_x) * static_cast<std::size_t>(cells_y), 0);
+  // A cell overlaps when any of a 5x5 lattice of its pixels, put at the matching depth, projects
+  // into the left image (inside the detection border, where the left camera would find corners).
+  const double depth = config_.matching_default_depth_m;
+  const double border = config_.detection_border_px;
+  const SE3d T_cam0_cam1 = T_cam1_cam0_.inverse();
+  for (int cy = 0; cy < cells_y; ++cy) {
+    for (int cx = 0; cx < cells_x; ++cx) {
+      bool seen = false;
+      for (int j = 0; j < 5 && !seen; ++j) {
+        for (int i = 0; i < 5 && !seen; ++i) {
+          const double u = std::min(cx * g + (i + 0.5) * g / 5.0, width - 1.0);
+          const double v = std::min(cy * g + (j + 0.5) * g / 5.0, height - 1.0);
+          Eigen::Vector3d bearing;
+          Eigen::Vector2d uv;
+          if (!cameras_model_[1].unproject(Eigen::Vector2d(u, v), bearing)) continue;
+          if (!cameras_model_[0].project(T_cam0_cam1 * (bearing * depth), uv)) continue;
+          seen = uv.x() >= border && uv.y() >= border && uv.x() < rig.cameras[0].width - border &&
+                 uv.y() < rig.cameras[0].height - border;
+        }
+      }
+      right_overlap_[static_cast<std::size_t>(cy * cells_x + cx)] = seen ? 1 : 0;
+    }
+  }
 }
 
 void KltFrontend::setAverageDepth(double depth_m) {
@@ -310,6 +346,23 @@ void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stat
   }
 }
 
+void KltFrontend::detectRightOnly(const FrontendInput& input, FrontendStats& stats) {
+  CameraState& right = cameras_[1];
+  new_points_.clear();
+  const int room = max_points_ - static_cast<int>(right.points.size());
+  if (room <= 0) return;
+  stats.detected_right_only =
+      detector_.detect(input.images[1], right.points, right_detector_params_, room, new_points_, right_overlap_);
+  // Ids are issued in increasing order, so the right list stays sorted for filterEpipolar's merge.
+  for (const Eigen::Vector2f& p : new_points_) {
+    const int slot = right.acquire();
+    buildPyramidPatch(right.cur(), p, *pattern_, right.slot(slot));
+    right.ids.push_back(next_track_id_++);
+    right.points.push_back(p);
+    right.slots.push_back(slot);
+  }
+}
+
 void KltFrontend::filterEpipolar(FrontendStats& stats) {
   CameraState& left = cameras_[0];
   CameraState& right = cameras_[1];
@@ -368,6 +421,7 @@ void KltFrontend::track(const FrontendInput& input, TrackedStereoFrame& out, Fro
     }
   }
   detectAndMatch(input, stats);
+  if (config_.detection_nonoverlap) detectRightOnly(input, stats);
   filterEpipolar(stats);
   have_previous_ = true;
 

@@ -52,6 +52,7 @@ struct FrontendStats {
   std::array<TemporalStats, 2> temporal{};
   std::array<bool, 2> bridged{false, false};  // the camera's prior came from an earlier P-frame
   int detected = 0;                           // new left points
+  int detected_right_only = 0;                // new right points where the left camera does not see
   int stereo_matched = 0;                     // of the new points, found in the right image
   int epipolar_rejected = 0;                  // right observations dropped by the epipolar check
   int num_left = 0, num_right = 0;            // observations output
@@ -142,6 +143,9 @@ class KltFrontend {
   const MotionField* priorField(int camera, const FrontendInput& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   void detectAndMatch(const FrontendInput& input, FrontendStats& stats);
+  void detectRightOnly(const FrontendInput& input, FrontendStats& stats);
+  // Right-image grid cells that the left camera sees (blocked for right-only detection).
+  void computeRightOverlap(const StereoRig& rig);
   void filterEpipolar(FrontendStats& stats);
 
   FrontendConfig config_;
@@ -155,6 +159,8 @@ class KltFrontend {
   Eigen::Matrix3d essential_;  // f0^T E f1 = 0 for unit bearings f0 (cam0), f1 (cam1)
   double average_depth_m_ = 0.0;
   DetectorParams detector_params_;
+  DetectorParams right_detector_params_;     // safe radius around the right camera's principal point
+  std::vector<std::uint8_t> right_overlap_;  // per right-image cell, non-zero: the left camera sees it
   GridDetector detector_;
   std::vector<Eigen::Vector2f> new_points_;
   std::array<CameraState, 2> cameras_;

@@ -44,6 +44,10 @@ struct FrontendConfig {
   PriorMode prior_mode = PriorMode::kMvParallelOf;
   double consensus_tolerance_px2 = 0.05;
   bool bridge_iframes = true;  // reuse the last P-frame's motion on I-frames
+  // Also detect in the right image where the left camera does not see (cells whose reprojection
+  // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
+  // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).
+  bool detection_nonoverlap = false;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias of
   // bilinear interpolation on sharp images (see ImagePyramid). Not in Basalt or the paper.
   bool presmooth = false;
