@@ -3,13 +3,15 @@
 
 #include <doctest/doctest.h>
 
+#include <array>
+
 #include "tests/test_alloc_counter.h"
 #include "tests/test_frontend_support.h"
 #include "voca/frontend/frontend.h"
 
 using namespace voca;
 
-TEST_CASE("frontend: no heap allocation in track() from the third frame on, in every prior mode") {
+TEST_CASE("frontend: no heap allocation in track() from the third frame on, in every prior mode and option") {
   const int w = 320, h = 240;
   const StereoRig rig = voca::test::pinholeRig(w, h, 300.0, 0.11);
   const voca::test::WaveTexture texture(21);
@@ -22,15 +24,22 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     texture.render(right[static_cast<std::size_t>(k)], w, h, 6.0 * k - 16.5, 2.0 * k);
   }
   MotionField field(w, h);
-  for (PriorMode mode :
-       {PriorMode::kNone, PriorMode::kMv, PriorMode::kOfThenMv, PriorMode::kMvThenOf, PriorMode::kMvParallelOf}) {
+  // The five modes, then the paper's mode with the options of our own (presmooth) and of TUM-VI
+  // (right-only detection, on a 0.4 m baseline rig so that the right image has cells of its own).
+  const StereoRig wide_rig = voca::test::pinholeRig(w, h, 300.0, 0.4);
+  const std::array<PriorMode, 6> modes = {PriorMode::kNone,     PriorMode::kMv,           PriorMode::kOfThenMv,
+                                          PriorMode::kMvThenOf, PriorMode::kMvParallelOf, PriorMode::kMvParallelOf};
+  for (int run = 0; run < 6; ++run) {
+    const PriorMode mode = modes[static_cast<std::size_t>(run)];
     FrontendConfig config;
     config.prior_mode = mode;
-    KltFrontend frontend(config, rig, {.max_points = 300});
+    config.presmooth = run == 5;
+    config.detection_nonoverlap = run == 5;
+    KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = 300});
     TrackedStereoFrame out;
     FrontendStats stats;
     long steady_allocations = 0, first_frame_allocations = 0;
-    int detected_after_start = 0, tracked_after_start = 0;
+    int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
       const long before = voca::test::g_allocations.load();
       // Every third frame is an I-frame, so bridging copies run inside the window too.
@@ -51,15 +60,17 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
       if (k >= 2) {
         steady_allocations += voca::test::g_allocations.load() - before;
         detected_after_start += stats.detected;
+        right_only_after_start += stats.detected_right_only;
         tracked_after_start += stats.temporal[0].kept + stats.temporal[1].kept;
       }
     }
-    INFO("mode " << priorModeName(mode));
+    INFO("mode " << priorModeName(mode) << (run == 5 ? " with presmooth and detection_nonoverlap" : ""));
     CHECK(steady_allocations == 0);
     // The counter sees the operator new calls: the first frame reserves the output buffers.
     CHECK(first_frame_allocations > 0);
     // The window exercised detection, stereo matching and tracking, not an idle tracker.
     CHECK(detected_after_start > 0);
     CHECK(tracked_after_start > 100);
+    if (run == 5) CHECK(right_only_after_start > 0);
   }
 }
