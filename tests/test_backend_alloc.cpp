@@ -15,12 +15,12 @@ TEST_CASE("backend: no heap allocation in process() after warm-up, including mar
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
-  sc.duration_s = 12.0;
-  sc.motion_scale = 2.0;  // more keyframes and marginalisations per second
+  sc.duration_s = 8.0;    // short enough to run under qemu in the ARM cross stage too
+  sc.motion_scale = 3.0;  // more keyframes and marginalisations per second
   SyntheticObservations seq = makeSyntheticObservations(rig, sc);
-  seq.frames[150].observations[1].clear();  // a frame that cannot be tracked: forces a reset
-  std::uint32_t state = 12345;              // scrambled left points (a decoder glitch)
-  for (KeypointObservation& o : seq.frames[150].observations[0]) {
+  seq.frames[90].observations[1].clear();  // a frame that cannot be tracked: forces a reset
+  std::uint32_t state = 12345;             // scrambled left points (a decoder glitch)
+  for (KeypointObservation& o : seq.frames[90].observations[0]) {
     state = state * 1664525u + 1013904223u;
     const float x = 20.f + static_cast<float>(state % 700u);
     state = state * 1664525u + 1013904223u;
@@ -43,6 +43,6 @@ TEST_CASE("backend: no heap allocation in process() after warm-up, including mar
   CHECK(before > 0);
   CHECK(keyframes > 2 * estimator.config().max_keyframes);  // marginalisation ran many times
   CHECK(resets >= 1);
-  CHECK(tracked > 150);
+  CHECK(tracked > 100);
   CHECK(allocations == 0);
 }
