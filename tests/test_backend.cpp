@@ -72,6 +72,16 @@ std::pair<double, double> maxPoseError(const std::vector<SE3d>& est, const std::
   return {max_t, max_r};
 }
 
+// 4 s of exact observations with fast motion (about 10 keyframes): short enough for the emulated
+// ARM run, long enough to marginalise.
+SyntheticObservations shortNoiseFreeSequence(const StereoRig& rig) {
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.0;
+  sc.duration_s = 4.0;
+  sc.motion_scale = 2.5;
+  return makeSyntheticObservations(rig, sc);
+}
+
 }  // namespace
 
 TEST_CASE("backend: stereographic bearing round trip and Jacobian") {
@@ -183,11 +193,7 @@ TEST_CASE("backend: id map agrees with std::unordered_map under random inserts a
 // estimator itself, keyframes and marginalisation included, checked on every architecture.
 TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory") {
   const StereoRig rig = synth::eurocRig();
-  SyntheticObservationsConfig sc;
-  sc.noise_px = 0.0;
-  sc.duration_s = 4.0;
-  sc.motion_scale = 2.5;  // faster motion: more keyframes in a short run
-  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  const SyntheticObservations seq = shortNoiseFreeSequence(rig);
   const RunResult result = run(rig, seq);
   CHECK(result.resets == 0);
   CHECK(result.lost == 0);
@@ -201,11 +207,7 @@ TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory")
 
 TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
   const StereoRig rig = synth::eurocRig();
-  SyntheticObservationsConfig sc;
-  sc.noise_px = 0.0;
-  sc.duration_s = 4.0;
-  sc.motion_scale = 2.5;
-  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  const SyntheticObservations seq = shortNoiseFreeSequence(rig);
   // Every third track loses its left views (right-only, as in a right camera's non-overlapping
   // area); the control drops those tracks altogether.
   SyntheticObservations right_only = seq, dropped = seq;
