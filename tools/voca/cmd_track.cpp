@@ -145,7 +145,10 @@ int runTrack(const TrackOptions& opts) {
 
   voca::KltFrontend frontend(config, seq.rig, {.max_points = opts.max_points});
   std::unique_ptr<voca::decode::RgbVideoWriter> writer;
-  if (!opts.overlay.empty()) writer = std::make_unique<voca::decode::RgbVideoWriter>(opts.overlay, 20, 1);
+  if (!opts.overlay.empty()) {
+    voca::encode::silenceCodecLogs();  // libavcodec prints x264's settings at info level otherwise
+    writer = std::make_unique<voca::decode::RgbVideoWriter>(opts.overlay, 20, 1);
+  }
   voca::RgbImage overlay;
   voca::TrackedStereoFrame out;
   voca::FrontendStats stats;
