@@ -18,6 +18,7 @@
 #include "voca/config/config.h"
 #include "voca/core/error.h"
 #include "voca/frontend/frontend.h"
+#include "voca/frontend/simd4.h"
 #include "voca/image/png_io.h"
 
 namespace voca::cli {
@@ -169,8 +170,10 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
       }
     }
   }
-  fmt::print("machine: {} ({} hardware threads); frontend on one thread, thread CPU time per stereo frame\n", cpu,
-             std::thread::hardware_concurrency());
+  fmt::print(
+      "machine: {} ({} hardware threads, KLT kernels: {}); frontend on one thread, thread CPU time per "
+      "stereo frame\n",
+      cpu, std::thread::hardware_concurrency(), voca::simd4::Native::kName);
   fmt::print("input: {}\n", seq.description);
   fmt::print("{:<16} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}\n", "mode", "median ms", "p99 ms", "mean ms", "wall p50",
              "left pts", "right pts");
@@ -224,7 +227,8 @@ Runner configureFrontendBench(CLI::App& app) {
   auto opts = std::make_shared<FrontendBenchOptions>();
   app.add_option("input", opts->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
   app.add_option("--calib", opts->calib, "Calibration file (default: the one found with the dataset)");
-  app.add_option("--config", opts->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
+  app.add_option("--config", opts->config,
+                 "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc)");
   app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first to get motion vectors")
       ->capture_default_str();
   app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
