@@ -9,7 +9,6 @@
 #include <cstring>
 #include <fstream>
 #include <optional>
-#include <random>
 #include <sstream>
 #include <system_error>
 
@@ -24,6 +23,7 @@ extern "C" {
 #include <libavutil/opt.h>
 }
 
+#include "platform/filesystem/temp_dir.h"
 #include "voca/core/error.h"
 
 namespace voca::encode {
@@ -79,31 +79,6 @@ std::string withReproducibleX264Asm(const std::string& params) {
 #endif
   return params;
 }
-
-// A fresh folder under the system temp directory, removed with everything in it on destruction.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device seed;
-    const auto base = std::filesystem::temp_directory_path();
-    for (int attempt = 0; attempt < 16; ++attempt) {
-      path_ = base / fmt::format("voca-encode-{:08x}", seed());
-      std::error_code error;
-      if (std::filesystem::create_directory(path_, error)) return;
-    }
-    throw RuntimeFailure(fmt::format("cannot create a temporary folder in {}", base.string()));
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 }  // namespace
 
@@ -455,7 +430,7 @@ EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSet
   std::optional<TempDir> temp;
   std::filesystem::path stats_file;
   if (num_passes == 2) {
-    temp.emplace();
+    temp.emplace("voca-encode");
     stats_file = temp->path() / "pass1.log";
   }
 

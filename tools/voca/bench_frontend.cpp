@@ -9,12 +9,12 @@
 #include <ctime>
 #include <fstream>
 #include <memory>
-#include <random>
 #include <thread>
 
 #include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/dataset_encoder.h"
+#include "platform/filesystem/temp_dir.h"
 #include "voca/config/config.h"
 #include "voca/core/error.h"
 #include "voca/frontend/frontend.h"
@@ -45,20 +45,6 @@ void decodeVideoDataset(const Dataset& dataset, int max_frames, LoadedSequence& 
   seq.has_motion = true;
 }
 
-// A scratch folder removed when it goes out of scope.
-struct TempFolder {
-  std::filesystem::path path;
-  TempFolder() {
-    std::random_device seed;
-    path = std::filesystem::temp_directory_path() / fmt::format("voca-track-{}", seed());
-    std::filesystem::create_directories(path);
-  }
-  ~TempFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path, ignored);
-  }
-};
-
 }  // namespace
 
 LoadedSequence loadStereoSequence(const std::filesystem::path& input, const LoadOptions& options) {
@@ -77,19 +63,19 @@ LoadedSequence loadStereoSequence(const std::filesystem::path& input, const Load
     seq.description = fmt::format("video {} ", input.string());
     decodeVideoDataset(dataset, options.max_frames, seq);
   } else if (options.encode_bitrate_bps > 0) {
-    TempFolder temp;
+    TempDir temp("voca-bench");
     encode::DatasetEncodeOptions encode_options;
     encode_options.settings.bitrate_bps = options.encode_bitrate_bps;
     encode_options.calibration = options.calibration;
     encode::silenceCodecLogs();
-    encode::encodeDataset(input, temp.path, encode_options, [](int camera, int pass, int passes, int frame, int n) {
+    encode::encodeDataset(input, temp.path(), encode_options, [](int camera, int pass, int passes, int frame, int n) {
       if (frame % 50 == 0 || frame + 1 == n) {
         fmt::print(stderr, "\rencoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
       }
     });
     fmt::print(stderr, "\n");
     seq.description = fmt::format("{} encoded at {} kbit/s ", input.string(), options.encode_bitrate_bps / 1000);
-    decodeVideoDataset(openDataset(temp.path), options.max_frames, seq);
+    decodeVideoDataset(openDataset(temp.path()), options.max_frames, seq);
   } else {
     seq.description = fmt::format("raw images {} ", input.string());
     for (const StereoFrameRef& ref : dataset.frames) {

@@ -3,12 +3,12 @@
 #include <fmt/core.h>
 
 #include <algorithm>
-#include <random>
 
 #include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "platform/filesystem/temp_dir.h"
 #include "voca/backend/estimator.h"
 #include "voca/calib/calibration.h"
 #include "voca/config/config.h"
@@ -19,22 +19,6 @@
 namespace voca::cli {
 
 namespace {
-
-// A temporary folder for on-the-fly encoding, removed at the end of the run.
-struct TempFolder {
-  std::filesystem::path path;
-  TempFolder() {
-    std::random_device seed;
-    path = std::filesystem::temp_directory_path() / fmt::format("voca-run-{}", seed());
-    std::filesystem::create_directories(path);
-  }
-  ~TempFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path, ignored);
-  }
-  TempFolder(const TempFolder&) = delete;
-  TempFolder& operator=(const TempFolder&) = delete;
-};
 
 // Stereo frames one at a time from either layout, so long sequences need no memory for all images.
 class FrameSource {
@@ -116,22 +100,22 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
 
   VoRunResult result;
   result.mode = config.frontend.prior_mode;
-  std::optional<TempFolder> temp;
+  std::optional<TempDir> temp;
   Dataset dataset = raw;
   if (options.encode_bitrate_bps > 0 && raw.layout != DatasetLayout::kVocaVideo) {
-    temp.emplace();
+    temp.emplace("voca-run");
     encode::DatasetEncodeOptions encode_options;
     encode_options.settings.bitrate_bps = options.encode_bitrate_bps;
     encode_options.calibration = options.calibration;
     encode::silenceCodecLogs();
     encode::encodeDataset(
-        options.input, temp->path, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
+        options.input, temp->path(), encode_options, [&](int camera, int pass, int passes, int frame, int n) {
           if (options.progress && (frame % 50 == 0 || frame + 1 == n)) {
             fmt::print(stderr, "\rencoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
           }
         });
     if (options.progress) fmt::print(stderr, "\n");
-    dataset = openDataset(temp->path);
+    dataset = openDataset(temp->path());
     result.description =
         fmt::format("{} encoded at {} kbit/s", options.input.string(), options.encode_bitrate_bps / 1000);
   } else {
