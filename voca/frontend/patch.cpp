@@ -26,6 +26,12 @@ PatchPattern makePattern(std::initializer_list<std::pair<int, int>> rows) {
   return pattern;
 }
 
+// True when every point of the square of half-size `reach` around (x, y) can be sampled (see
+// canSample): a patch whose points lie within that reach needs no per-point test.
+bool squareInside(const FloatView& image, float x, float y, float reach) {
+  return canSample(image, x - reach, y - reach) && canSample(image, x + reach, y + reach);
+}
+
 }  // namespace
 
 const PatchPattern& pattern24() {
@@ -52,8 +58,7 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   float sum = 0.f;
   int count = 0;
   const float half = pattern.max_abs;
-  if (canSample(image, center.x() - half, center.y() - half) &&
-      canSample(image, center.x() + half, center.y() + half)) {
+  if (squareInside(image, center.x(), center.y(), half)) {
     // Fast path, the whole patch inside: pattern offsets are integers, so every sample has the same
     // bilinear weights and only the base pointer moves.
     const int ix = static_cast<int>(center.x()), iy = static_cast<int>(center.y());
@@ -131,10 +136,9 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
   const int n = tmpl.size;
   const float c = T.unitComplex().x(), s = T.unitComplex().y();
   const float tx = T.translation().x(), ty = T.translation().y();
-  const float r = pattern.max_norm;
   float sum = 0.f;
   int count = 0;
-  if (tmpl.all_points_valid && canSample(target, tx - r, ty - r) && canSample(target, tx + r, ty + r)) {
+  if (tmpl.all_points_valid && squareInside(target, tx, ty, pattern.max_norm)) {
     // Fast path, every point valid on both sides: no per-point tests.
     sum = patch_kernels::sampleWarped<simd4::Native>(target.data, target.stride, pattern, n, c, s, tx, ty,
                                                      residual.data(), nullptr, nullptr);
@@ -176,12 +180,10 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
   const float max_step2 = params.max_step_px * params.max_step_px;
   const float min_step = coarse ? params.coarse_min_step_px : params.min_step_px;
   const float min_step2 = min_step * min_step;
-  const float reach = pattern.max_norm;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
     float inc[3];
     const float tx = T.translation().x(), ty = T.translation().y();
-    if (tmpl.all_points_valid && canSample(target, tx - reach, ty - reach) &&
-        canSample(target, tx + reach, ty + reach)) {
+    if (tmpl.all_points_valid && squareInside(target, tx, ty, pattern.max_norm)) {
       // Every point inside: one pass samples the target and forms H^-1 J^T r directly, as
       // sum_i step_i (I_i / mean - value_i) = (sum_i step_i I_i) / mean - sum_i step_i value_i.
       float dots[3];
