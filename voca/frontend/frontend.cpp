@@ -31,6 +31,12 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return m;
 }
 
+// The centre of the detection mask (image_safe_radius_px): every camera model starts fx fy cx cy.
+Eigen::Vector2f principalPoint(const CameraCalibration& camera) {
+  const std::vector<double> intrinsics = camera.camera.params();
+  return {static_cast<float>(intrinsics[2]), static_cast<float>(intrinsics[3])};
+}
+
 }  // namespace
 
 KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities)
@@ -79,14 +85,11 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   detector_params_.min_threshold = config_.detection_min_threshold;
   detector_params_.border_px = config_.detection_border_px;
   detector_params_.safe_radius_px = static_cast<float>(config_.image_safe_radius_px);
-  const std::vector<double> intrinsics = rig.cameras[0].camera.params();  // every model starts fx fy cx cy
-  detector_params_.safe_center = Eigen::Vector2f(static_cast<float>(intrinsics[2]), static_cast<float>(intrinsics[3]));
+  detector_params_.safe_center = principalPoint(rig.cameras[0]);
   detector_ = GridDetector(max_width, max_height, config_.grid_size_px);
   new_points_.reserve(static_cast<std::size_t>(max_points_));
   right_detector_params_ = detector_params_;
-  const std::vector<double> right_intrinsics = rig.cameras[1].camera.params();
-  right_detector_params_.safe_center =
-      Eigen::Vector2f(static_cast<float>(right_intrinsics[2]), static_cast<float>(right_intrinsics[3]));
+  right_detector_params_.safe_center = principalPoint(rig.cameras[1]);
   if (config_.detection_nonoverlap) computeRightOverlap(rig);
 }
 
