@@ -7,6 +7,7 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -18,6 +19,8 @@
 #include "tests/test_support.h"
 #include "voca/config/config.h"
 #include "voca/frontend/frontend.h"
+#include "voca/frontend/patch.h"
+#include "voca/frontend/pyramid.h"
 #include "voca/image/png_io.h"
 #include "voca/synth/motion.h"
 #include "voca/synth/renderer.h"
@@ -65,6 +68,7 @@ struct SynthWorld {
 
   // Lens blur of the renderer (see synth::RenderSettings::psf_sigma_px); 0 renders like before it existed.
   float psf_sigma_px = 0.0f;
+  float noise_sigma = synth::RenderSettings().noise_sigma;
 
   void render(int k, int c, GrayImage& out) const {
     const synth::RayTable& table = rays[static_cast<std::size_t>(c)];
@@ -73,6 +77,7 @@ struct SynthWorld {
     settings.frame_index = static_cast<std::uint64_t>(k);
     settings.camera_index = c;
     settings.psf_sigma_px = psf_sigma_px;
+    settings.noise_sigma = noise_sigma;
     synth::renderRows(scene, table, pose(k, c), settings, out.view(), 0, table.height());
   }
 
@@ -160,6 +165,55 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted.empty() ? 1e9 : sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
 }
 
+// The tracker's cost without the rotation: sum over the offsets q of the squared difference of the
+// mean-normalised samples I1(p + q) and I0(p0 + q), bilinear like the tracker. `dense` uses every
+// pixel of the 52-point pattern's 15x15 square instead of its 2 px grid.
+double patchCost(const FloatView& from, const Eigen::Vector2f& p0, const FloatView& to, const Eigen::Vector2f& p,
+                 bool dense) {
+  std::array<float, 225> a{}, b{};
+  std::size_t n = 0;
+  float sum_a = 0.f, sum_b = 0.f;
+  const auto add = [&](float qx, float qy) {
+    a[n] = sampleBilinear(from, p0.x() + qx, p0.y() + qy);
+    b[n] = sampleBilinear(to, p.x() + qx, p.y() + qy);
+    sum_a += a[n];
+    sum_b += b[n];
+    ++n;
+  };
+  const PatchPattern& pattern = pattern52();
+  if (dense) {
+    for (int qy = -7; qy <= 7; ++qy)
+      for (int qx = -7; qx <= 7; ++qx) add(static_cast<float>(qx), static_cast<float>(qy));
+  } else {
+    for (int i = 0; i < pattern.size; ++i)
+      add(pattern.x[static_cast<std::size_t>(i)], pattern.y[static_cast<std::size_t>(i)]);
+  }
+  double cost = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = static_cast<double>(b[i]) / sum_b - static_cast<double>(a[i]) / sum_a;
+    cost += r * r;
+  }
+  return cost;
+}
+
+// Where the cost is lowest on a 0.02 px grid within 0.6 px of `centre`.
+Eigen::Vector2f costMinimum(const FloatView& from, const Eigen::Vector2f& p0, const FloatView& to,
+                            const Eigen::Vector2d& centre, bool dense) {
+  Eigen::Vector2f best = centre.cast<float>();
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (int iy = -30; iy <= 30; ++iy) {
+    for (int ix = -30; ix <= 30; ++ix) {
+      const Eigen::Vector2f p = (centre + 0.02 * Eigen::Vector2d(ix, iy)).cast<float>();
+      const double cost = patchCost(from, p0, to, p, dense);
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = p;
+      }
+    }
+  }
+  return best;
+}
+
 // Encodes one camera's frames at 500 kbit/s (the paper's settings) and decodes them back with motion vectors.
 void encodeRoundTrip(const std::vector<const GrayImage*>& images, const std::filesystem::path& file,
                      std::vector<Frame>& frames, int camera) {
@@ -206,18 +260,18 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
   MESSAGE("synthetic gentle: " << errors.size() << " observations, median " << quantile(errors, 0.5) << " px, p90 "
                                << quantile(errors, 0.9) << " px");
   REQUIRE(errors.size() > 300);
-  // The issue asks for median < 0.05 px and p90 < 0.1 px; this scene does not meet it yet. The
-  // ground truth checks out: no signed bias (mean error (-0.016, 0.010) px, no component along the
-  // motion), the ray table reprojects to 3e-5 px, one-frame errors (median 0.085 px) are close to
-  // 7-frame ones (0.11 px). The error is image content and the tracker's response to it: without
-  // lens blur median 0.21 / p90 0.48 px, with the 0.6 px PSF 0.12 / 0.30 px; noise-free 0.096 /
-  // 0.24 px (PSF 0.6), 0.042 / 0.12 px (PSF 1.0). The p90 tail is a few tracks slipping along
-  // edge-like texture (one drifts 0.3 -> 2.9 px over 7 frames). The bounds are the measured values
-  // (rendering is deterministic) plus ~35 % margin, guarding against regressions.
+  // The issue asks for median < 0.05 px and p90 < 0.1 px; this scene does not meet it. The ground
+  // truth checks out (no signed bias, the ray table reprojects to 3e-5 px), and the test below shows
+  // why: the tracker lands near the exact minimum of Basalt's 52-point cost, and that minimum is
+  // itself 0.085 / 0.19 px from the truth after one frame step (2 px sample grid aliasing fine detail,
+  // plus 2 gray levels of sensor noise); up to 7 frames of drift add the rest. Bicubic instead of
+  // bilinear sampling, 20 iterations, ESM and re-aligning to each track's first template changed
+  // nothing; the true local warp differs from SE(2) by < 0.03 px at the patch edge for 3 in 4
+  // points, uncorrelated with the error. Bounds: measured plus ~35 %.
   CHECK(quantile(errors, 0.5) < 0.17);
   CHECK(quantile(errors, 0.9) < 0.4);
 
-  // presmooth ([1 2 1]/4 on level 0) removes the detail bilinear interpolation mis-places: measured
+  // presmooth ([1 2 1]/4 on level 0) removes the detail the pattern's 2 px grid aliases: measured
   // median 0.060 / p90 0.166 px, about half. Bounds: measured plus ~30 %, and below the plain run.
   config.presmooth = true;
   const std::vector<double> smoothed = trackErrors(world, runFrontend(config, world.rig, frames));
@@ -227,6 +281,84 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
   CHECK(quantile(smoothed, 0.5) < 0.08);
   CHECK(quantile(smoothed, 0.9) < 0.22);
   CHECK(quantile(smoothed, 0.5) < 0.7 * quantile(errors, 0.5));
+}
+
+TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optimum; pattern and noise set the floor") {
+  // Why the gentle-motion errors above exceed the issue's 0.05 / 0.1 px: the cost itself. For every
+  // point tracked from frame 0 to 1 the cost's exact minimum (translation only, found by grid
+  // search) is compared with the tracker's answer and with the truth.
+  SynthWorld world(synth::MotionPreset::kGentle, 20.0, 2, 3.0);
+  world.psf_sigma_px = 0.6f;
+  for (const float noise : {2.0f, 0.0f}) {
+    world.noise_sigma = noise;
+    std::vector<Frame> frames(2);
+    for (int k = 0; k < 2; ++k) {
+      world.render(k, 0, frames[static_cast<std::size_t>(k)].left);
+      world.render(k, 1, frames[static_cast<std::size_t>(k)].right);
+      frames[static_cast<std::size_t>(k)].t_ns = k * 50'000'000LL;
+    }
+    for (const bool presmooth : {false, true}) {
+      CAPTURE(noise);
+      CAPTURE(presmooth);
+      FrontendConfig config;
+      config.prior_mode = PriorMode::kNone;
+      config.presmooth = presmooth;
+      const RunResult run = runFrontend(config, world.rig, frames);
+      std::array<ImagePyramid, 2> level0;
+      for (int k = 0; k < 2; ++k) {
+        const GrayImage& image = frames[static_cast<std::size_t>(k)].left;
+        level0[static_cast<std::size_t>(k)] = ImagePyramid(image.width(), image.height(), 1, presmooth);
+        level0[static_cast<std::size_t>(k)].build(image.view());
+      }
+      std::map<std::uint64_t, Eigen::Vector2f> start;
+      for (const KeypointObservation& o : run.left[0]) start[o.track_id] = o.px;
+      std::vector<double> tracker, optimum, dense, tracker_to_optimum;
+      for (const KeypointObservation& o : run.left[1]) {
+        const auto it = start.find(o.track_id);
+        if (it == start.end()) continue;
+        const auto truth = world.truth(0, it->second, 1);
+        if (!truth) continue;
+        const Eigen::Vector2f best = costMinimum(level0[0].level(0), it->second, level0[1].level(0), *truth, false);
+        tracker.push_back((o.px.cast<double>() - *truth).norm());
+        optimum.push_back((best.cast<double>() - *truth).norm());
+        tracker_to_optimum.push_back((o.px - best).cast<double>().norm());
+        if (noise > 0.f && !presmooth) {
+          const Eigen::Vector2f dense_best =
+              costMinimum(level0[0].level(0), it->second, level0[1].level(0), *truth, true);
+          dense.push_back((dense_best.cast<double>() - *truth).norm());
+        }
+      }
+      for (auto* v : {&tracker, &optimum, &dense, &tracker_to_optimum}) std::sort(v->begin(), v->end());
+      MESSAGE("noise " << noise << ", presmooth " << presmooth << ": " << tracker.size()
+                       << " points; error median / p90: "
+                       << "tracker " << quantile(tracker, 0.5) << " / " << quantile(tracker, 0.9)
+                       << " px, the cost's optimum " << quantile(optimum, 0.5) << " / " << quantile(optimum, 0.9)
+                       << " px; tracker to optimum " << quantile(tracker_to_optimum, 0.5) << " / "
+                       << quantile(tracker_to_optimum, 0.9) << " px");
+      REQUIRE(tracker.size() > 100);
+      // The optimiser does its job: it lands near the cost's minimum, and its error is close to the
+      // minimum's own. Measured gaps 0.003-0.02 px (median), 0.006-0.07 px (p90); part of it is the
+      // rotation the tracker also fits.
+      CHECK(quantile(tracker_to_optimum, 0.5) < 0.07);
+      CHECK(quantile(tracker, 0.5) < quantile(optimum, 0.5) + 0.03);
+      CHECK(quantile(tracker, 0.9) < quantile(optimum, 0.9) + 0.1);
+      if (!dense.empty()) {
+        // The 2 px grid of the pattern aliases detail finer than 4 px: on these sharp images every
+        // pixel of the same square puts the optimum at half the distance from the truth (measured
+        // 0.045 vs 0.085 px median). That is what presmooth removes.
+        MESSAGE("every pixel of the 15x15 square instead: optimum median " << quantile(dense, 0.5) << " p90 "
+                                                                           << quantile(dense, 0.9) << " px");
+        CHECK(quantile(dense, 0.5) < 0.75 * quantile(optimum, 0.5));
+      }
+      if (noise == 0.f && presmooth) {
+        // Without sensor noise and with the aliasing smoothed away, one frame step meets the issue's
+        // target (measured 0.031 / 0.086 px). With 2 gray levels of noise the cost's exact minimum
+        // alone is at 0.045 / 0.100 px: no optimiser of this cost can meet p90 < 0.1 px there.
+        CHECK(quantile(tracker, 0.5) < 0.05);
+        CHECK(quantile(tracker, 0.9) < 0.1);
+      }
+    }
+  }
 }
 
 TEST_CASE("e2e frontend: large motion through 500 kbit/s H.264: none loses most, mv_parallel_of keeps most") {

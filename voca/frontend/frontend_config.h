@@ -48,8 +48,8 @@ struct FrontendConfig {
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).
   bool detection_nonoverlap = false;
-  // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias of
-  // bilinear interpolation on sharp images (see ImagePyramid). Not in Basalt or the paper.
+  // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
+  // patterns' 2 px sample grid has on sharp images (see ImagePyramid). Not in Basalt or the paper.
   bool presmooth = false;
 };
 

@@ -17,10 +17,11 @@ using FloatView = ImageView<const float>;
 // (borders replicated) and subsampled by taking every second pixel, so pixel (x, y) of level l lies
 // at (2^l x, 2^l y) in level 0 and coordinates convert by an exact scale.
 //
-// Why presmooth: bilinear interpolation shifts the phase of detail near the sampling limit by up to
-// a quarter pixel, depending on the sub-pixel position, so sharp images bias KLT by a tenth of a
-// pixel. The [1 2 1]/4 kernel removes that detail (zero response at Nyquist, half at a 4 px period).
-// It is symmetric, so it moves no feature, and filtering both images of a pair is harmless to the
+// Why presmooth: the tracking patterns sample a patch on a 2 px grid, which aliases detail finer
+// than a 4 px period; on sharp images that puts even the exact minimum of the patch cost about a
+// tenth of a pixel from the truth (a dense grid halves it, bicubic sampling changes nothing). The
+// [1 2 1]/4 kernel removes that detail (zero response at Nyquist, half at a 4 px period). It is
+// symmetric, so it moves no feature, and filtering both images of a pair is harmless to the
 // alignment itself.
 class ImagePyramid {
  public:
