@@ -48,7 +48,9 @@ struct SynthWorld {
   std::vector<SE3d> T_world_cam0;
   SE3d T_cam0_cam1 = rig.T_cam0_cam1();
 
-  SynthWorld(synth::MotionPreset preset, double rate_hz, int frames, double t0_s) {
+  double rate_hz = 0.0;
+
+  SynthWorld(synth::MotionPreset preset, double rate_hz_in, int frames, double t0_s) : rate_hz(rate_hz_in) {
     const synth::RoomBox room;
     for (int k = 0; k < frames; ++k) {
       T_world_cam0.push_back(synth::presetCameraPose(preset, t0_s + k / rate_hz, room, 0.8));
@@ -79,6 +81,18 @@ struct SynthWorld {
     settings.psf_sigma_px = psf_sigma_px;
     settings.noise_sigma = noise_sigma;
     synth::renderRows(scene, table, pose(k, c), settings, out.view(), 0, table.height());
+  }
+
+  // The first `count` stereo frames, raw images, time-stamped at rate_hz.
+  std::vector<Frame> renderFrames(int count) const {
+    std::vector<Frame> frames(static_cast<std::size_t>(count));
+    for (int k = 0; k < count; ++k) {
+      Frame& f = frames[static_cast<std::size_t>(k)];
+      render(k, 0, f.left);
+      render(k, 1, f.right);
+      f.t_ns = std::llround(1e9 * k / rate_hz);
+    }
+    return frames;
   }
 
   // Where the surface point seen at integer pixel px of cam0 in frame k0 appears in cam0 at frame k;
@@ -165,28 +179,30 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted.empty() ? 1e9 : sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
 }
 
-// The tracker's cost without the rotation: sum over the offsets q of the squared difference of the
-// mean-normalised samples I1(p + q) and I0(p0 + q), bilinear like the tracker. `dense` uses every
-// pixel of the 52-point pattern's 15x15 square instead of its 2 px grid.
-double patchCost(const FloatView& from, const Eigen::Vector2f& p0, const FloatView& to, const Eigen::Vector2f& p,
-                 bool dense) {
+// The tracker's own cost at translation p, rotation fixed at zero: the sum of squared residuals
+// patchResidual forms against the template.
+double patternCost(const PatchTemplate& tmpl, const FloatView& to, const Eigen::Vector2f& p) {
+  std::array<float, PatchPattern::kMaxSize> residual{};
+  if (patchResidual(to, tmpl, pattern52(), SE2f(0.f, p), residual) == 0) return std::numeric_limits<double>::infinity();
+  double cost = 0.0;
+  for (int i = 0; i < tmpl.size; ++i)
+    cost += static_cast<double>(residual[static_cast<std::size_t>(i)]) * residual[static_cast<std::size_t>(i)];
+  return cost;
+}
+
+// The same cost on every pixel of the 52-point pattern's 15x15 square instead of its 2 px grid:
+// squared differences of the mean-normalised bilinear samples I1(p + q) and I0(p0 + q).
+double denseCost(const FloatView& from, const Eigen::Vector2f& p0, const FloatView& to, const Eigen::Vector2f& p) {
   std::array<float, 225> a{}, b{};
-  std::size_t n = 0;
   float sum_a = 0.f, sum_b = 0.f;
-  const auto add = [&](float qx, float qy) {
-    a[n] = sampleBilinear(from, p0.x() + qx, p0.y() + qy);
-    b[n] = sampleBilinear(to, p.x() + qx, p.y() + qy);
-    sum_a += a[n];
-    sum_b += b[n];
-    ++n;
-  };
-  const PatchPattern& pattern = pattern52();
-  if (dense) {
-    for (int qy = -7; qy <= 7; ++qy)
-      for (int qx = -7; qx <= 7; ++qx) add(static_cast<float>(qx), static_cast<float>(qy));
-  } else {
-    for (int i = 0; i < pattern.size; ++i)
-      add(pattern.x[static_cast<std::size_t>(i)], pattern.y[static_cast<std::size_t>(i)]);
+  std::size_t n = 0;
+  for (int qy = -7; qy <= 7; ++qy) {
+    for (int qx = -7; qx <= 7; ++qx, ++n) {
+      a[n] = sampleBilinear(from, p0.x() + static_cast<float>(qx), p0.y() + static_cast<float>(qy));
+      b[n] = sampleBilinear(to, p.x() + static_cast<float>(qx), p.y() + static_cast<float>(qy));
+      sum_a += a[n];
+      sum_b += b[n];
+    }
   }
   double cost = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -196,17 +212,17 @@ double patchCost(const FloatView& from, const Eigen::Vector2f& p0, const FloatVi
   return cost;
 }
 
-// Where the cost is lowest on a 0.02 px grid within 0.6 px of `centre`.
-Eigen::Vector2f costMinimum(const FloatView& from, const Eigen::Vector2f& p0, const FloatView& to,
-                            const Eigen::Vector2d& centre, bool dense) {
+// Where cost(p) is lowest on a 0.02 px grid within 0.6 px of `centre`.
+template <typename Cost>
+Eigen::Vector2f costMinimum(const Eigen::Vector2d& centre, const Cost& cost) {
   Eigen::Vector2f best = centre.cast<float>();
   double best_cost = std::numeric_limits<double>::infinity();
   for (int iy = -30; iy <= 30; ++iy) {
     for (int ix = -30; ix <= 30; ++ix) {
       const Eigen::Vector2f p = (centre + 0.02 * Eigen::Vector2d(ix, iy)).cast<float>();
-      const double cost = patchCost(from, p0, to, p, dense);
-      if (cost < best_cost) {
-        best_cost = cost;
+      const double c = cost(p);
+      if (c < best_cost) {
+        best_cost = c;
         best = p;
       }
     }
@@ -244,13 +260,8 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
   SynthWorld world(synth::MotionPreset::kGentle, 20.0, num_frames, 3.0);
   // A real lens leaves little contrast at Nyquist; sigma 0.6 px is the middle of the usual range.
   world.psf_sigma_px = 0.6f;
-  std::vector<Frame> frames(num_frames);
   const std::clock_t render_start = std::clock();
-  for (int k = 0; k < num_frames; ++k) {
-    world.render(k, 0, frames[static_cast<std::size_t>(k)].left);
-    world.render(k, 1, frames[static_cast<std::size_t>(k)].right);
-    frames[static_cast<std::size_t>(k)].t_ns = k * 50'000'000LL;
-  }
+  const std::vector<Frame> frames = world.renderFrames(num_frames);
   MESSAGE("render CPU time per stereo pair: "
           << 1e3 * static_cast<double>(std::clock() - render_start) / CLOCKS_PER_SEC / num_frames << " ms");
   FrontendConfig config;
@@ -291,12 +302,7 @@ TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optim
   world.psf_sigma_px = 0.6f;
   for (const float noise : {2.0f, 0.0f}) {
     world.noise_sigma = noise;
-    std::vector<Frame> frames(2);
-    for (int k = 0; k < 2; ++k) {
-      world.render(k, 0, frames[static_cast<std::size_t>(k)].left);
-      world.render(k, 1, frames[static_cast<std::size_t>(k)].right);
-      frames[static_cast<std::size_t>(k)].t_ns = k * 50'000'000LL;
-    }
+    const std::vector<Frame> frames = world.renderFrames(2);
     for (const bool presmooth : {false, true}) {
       CAPTURE(noise);
       CAPTURE(presmooth);
@@ -318,13 +324,19 @@ TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optim
         if (it == start.end()) continue;
         const auto truth = world.truth(0, it->second, 1);
         if (!truth) continue;
-        const Eigen::Vector2f best = costMinimum(level0[0].level(0), it->second, level0[1].level(0), *truth, false);
+        const FloatView from = level0[0].level(0), to = level0[1].level(0);
+        const Eigen::Vector2f p0 = it->second;
+        PatchTemplate tmpl;
+        tmpl.build(from, p0, pattern52());
+        REQUIRE(tmpl.valid);
+        const Eigen::Vector2f best =
+            costMinimum(*truth, [&](const Eigen::Vector2f& p) { return patternCost(tmpl, to, p); });
         tracker.push_back((o.px.cast<double>() - *truth).norm());
         optimum.push_back((best.cast<double>() - *truth).norm());
         tracker_to_optimum.push_back((o.px - best).cast<double>().norm());
         if (noise > 0.f && !presmooth) {
           const Eigen::Vector2f dense_best =
-              costMinimum(level0[0].level(0), it->second, level0[1].level(0), *truth, true);
+              costMinimum(*truth, [&](const Eigen::Vector2f& p) { return denseCost(from, p0, to, p); });
           dense.push_back((dense_best.cast<double>() - *truth).norm());
         }
       }
