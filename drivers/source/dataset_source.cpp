@@ -1,0 +1,134 @@
+#include "drivers/source/dataset_source.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "voca/core/error.h"
+#include "voca/image/png_io.h"
+
+namespace voca {
+
+namespace {
+
+std::size_t frameLimit(std::size_t available, int max_frames) {
+  return max_frames > 0 ? std::min<std::size_t>(available, static_cast<std::size_t>(max_frames)) : available;
+}
+
+// Frames per second from the median interval of the dataset's timestamps; 0 for fewer than two.
+double medianRate(const Dataset& dataset) {
+  if (dataset.frames.size() < 2) return 0.0;
+  std::vector<std::int64_t> intervals;
+  intervals.reserve(dataset.frames.size() - 1);
+  for (std::size_t i = 1; i < dataset.frames.size(); ++i) {
+    intervals.push_back(dataset.frames[i].t_ns - dataset.frames[i - 1].t_ns);
+  }
+  std::nth_element(intervals.begin(), intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2),
+                   intervals.end());
+  const std::int64_t median = intervals[intervals.size() / 2];
+  return median > 0 ? 1e9 / static_cast<double>(median) : 0.0;
+}
+
+}  // namespace
+
+ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& options) : dataset_(std::move(dataset)) {
+  if (dataset_.layout == DatasetLayout::kVocaVideo) {
+    throw InputError(dataset_.root.string() + ": a video folder, not an image dataset");
+  }
+  count_ = frameLimit(dataset_.frames.size(), options.max_frames);
+  if (count_ == 0) throw InputError(dataset_.root.string() + ": no stereo frames");
+  GrayImage left, right;
+  readPngGray(dataset_.frames[0].left, left);
+  readPngGray(dataset_.frames[0].right, right);
+  if (left.width() != right.width() || left.height() != right.height()) {
+    throw InputError(fmt::format("{}: left images are {}x{} but right images {}x{}", dataset_.root.string(),
+                                 left.width(), left.height(), right.width(), right.height()));
+  }
+  info_.kind = SourceKind::kRaw;
+  info_.width = left.width();
+  info_.height = left.height();
+  info_.expected_frames = static_cast<std::int64_t>(count_);
+  info_.nominal_rate_hz = medianRate(dataset_);
+  info_.description =
+      fmt::format("raw images {} ({} frames, {}x{})", dataset_.root.string(), count_, info_.width, info_.height);
+}
+
+bool ImageDatasetSource::next(RawStereoFrame& frame) {
+  if (interrupted_ || index_ >= count_) return false;
+  const StereoFrameRef& ref = dataset_.frames[index_];
+  readPngGray(ref.left, frame.images[0]);
+  readPngGray(ref.right, frame.images[1]);
+  for (const GrayImage& image : frame.images) {
+    if (image.width() != info_.width || image.height() != info_.height) {
+      throw InputError(fmt::format("{}: frame {} is {}x{}, the first frame was {}x{}", ref.left.string(), index_,
+                                   image.width(), image.height(), info_.width, info_.height));
+    }
+  }
+  frame.t_ns = ref.t_ns;
+  frame.frame_index = static_cast<std::int64_t>(index_);
+  ++index_;
+  return true;
+}
+
+VideoFolderSource::VideoFolderSource(Dataset dataset, const ReplayOptions& options)
+    : dataset_(std::move(dataset)), options_(options) {
+  if (dataset_.layout != DatasetLayout::kVocaVideo) {
+    throw InputError(dataset_.root.string() + ": not a video folder (expected mav0/camN/data.mp4)");
+  }
+  std::string context;
+  for (const std::string& warning : dataset_.warnings) context += "; " + warning;
+  const std::array<std::filesystem::path, 2> videos = {dataset_.video_left, dataset_.video_right};
+  for (std::size_t c = 0; c < 2; ++c) {
+    demuxers_[c] = std::make_unique<decode::Demuxer>(videos[c]);
+    const decode::StreamInfo& stream = demuxers_[c]->stream();
+    if (stream.num_frames > 0 && static_cast<std::size_t>(stream.num_frames) != dataset_.frames.size()) {
+      throw InputError(fmt::format(
+          "{}: has {} frames but data.csv lists {} timestamps; frames must follow data.csv rows one to one{}",
+          videos[c].string(), stream.num_frames, dataset_.frames.size(), context));
+    }
+    info_.streams[c] = stream;
+  }
+  const decode::StreamInfo& left = info_.streams[0];
+  const decode::StreamInfo& right = info_.streams[1];
+  if (left.width != right.width || left.height != right.height) {
+    throw InputError(fmt::format("{}: cam0 video is {}x{} but cam1 video {}x{}", dataset_.root.string(), left.width,
+                                 left.height, right.width, right.height));
+  }
+  count_ = frameLimit(dataset_.frames.size(), options.max_frames);
+  if (count_ == 0) throw InputError(dataset_.root.string() + ": no stereo frames");
+  info_.kind = SourceKind::kEncoded;
+  info_.width = left.width;
+  info_.height = left.height;
+  info_.expected_frames = static_cast<std::int64_t>(count_);
+  info_.nominal_rate_hz = medianRate(dataset_);
+  info_.description = fmt::format("video {} ({} frames, 2x {}x{} {})", dataset_.root.string(), count_, left.width,
+                                  left.height, left.codec_name);
+}
+
+VideoFolderSource::~VideoFolderSource() = default;
+
+bool VideoFolderSource::next(EncodedStereoPacket& packet) {
+  if (interrupted_ || ended_ || index_ >= count_) return false;
+  for (std::size_t c = 0; c < 2; ++c) {
+    if (demuxers_[c]->read(packet.packets[c])) continue;
+    const std::string message =
+        fmt::format("{}: video ended after {} frames but data.csv lists {} (truncated or damaged video?)",
+                    demuxers_[c]->path().string(), index_, dataset_.frames.size());
+    if (options_.strict) throw InputError(message);
+    warnings_.push_back(message);
+    ended_ = true;
+    return false;
+  }
+  packet.t_ns = dataset_.frames[index_].t_ns;
+  packet.frame_index = static_cast<std::int64_t>(index_);
+  ++index_;
+  return true;
+}
+
+std::unique_ptr<StereoSource> openDatasetSource(const Dataset& dataset, const ReplayOptions& options) {
+  if (dataset.layout == DatasetLayout::kVocaVideo) return std::make_unique<VideoFolderSource>(dataset, options);
+  return std::make_unique<ImageDatasetSource>(dataset, options);
+}
+
+}  // namespace voca
