@@ -295,11 +295,11 @@ struct PlaneSequence {
     texture.render(left, kWidth, kHeight, shift.x(), shift.y());
     texture.render(right, kWidth, kHeight, shift.x() - disparity, shift.y());
   }
-  FrontendInput input(int frame) const {
-    FrontendInput in;
-    in.images = {left.view(), right.view()};
+  DecodedStereoFrame input(int frame) const {
+    DecodedStereoFrame in;
+    in.images = {left, right};
     in.t_ns = frame * 50'000'000LL;
-    in.picture_type = PictureType::kP;
+    in.frame_index = frame;
     return in;
   }
 };
@@ -422,12 +422,12 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     std::array<Step, 3> result{};
     for (int k = 0; k < 3; ++k) {
       seq.render(k);
-      FrontendInput in = seq.input(k);
+      DecodedStereoFrame in = seq.input(k);
       const PictureType type = k == 2 ? third_type : PictureType::kP;
       uniformField(field_left, seq.kWidth, seq.kHeight, coded, type);
       uniformField(field_right, seq.kWidth, seq.kHeight, coded, type);
-      in.motion = {&field_left, &field_right};
-      in.picture_type = type;
+      in.motion = {field_left, field_right};
+      in.has_motion = true;
       frontend.track(in, frame, stats);
       Step& step = result[static_cast<std::size_t>(k)];
       step.stats = stats.temporal[0];
@@ -487,8 +487,9 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
     FrontendStats stats;
     for (int k = 0; k < 2; ++k) {
       seq.render(k);
-      FrontendInput in = seq.input(k);
-      in.motion = {&field, &field};
+      DecodedStereoFrame in = seq.input(k);
+      in.motion = {field, field};
+      in.has_motion = true;
       frontend.track(in, frame, stats);
     }
     result[mode] = stats.temporal[0];
@@ -518,8 +519,8 @@ TEST_CASE("frontend: constructor and inputs are checked") {
   CHECK_THROWS_AS(KltFrontend(FrontendConfig{}, mono), InputError);
   KltFrontend frontend(FrontendConfig{}, rig);
   GrayImage small(100, 100, 0);
-  FrontendInput in;
-  in.images = {small.view(), small.view()};
+  DecodedStereoFrame in;
+  in.images = {small, small};
   TrackedStereoFrame frame;
   FrontendStats stats;
   CHECK_THROWS_AS(frontend.track(in, frame, stats), InputError);

@@ -38,6 +38,8 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = 300});
     TrackedStereoFrame out;
     FrontendStats stats;
+    DecodedStereoFrame in;
+    in.reserve(w, h);
     long steady_allocations = 0, first_frame_allocations = 0;
     int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
@@ -50,11 +52,14 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
           for (int x = 0; x < w; x += 16) field.addBlock(x, y, 16, 16, 6.f, 2.f);
       }
       field.finalize();
-      FrontendInput in;
-      in.images = {left[static_cast<std::size_t>(k)].view(), right[static_cast<std::size_t>(k)].view()};
-      in.motion = {&field, &field};
-      in.picture_type = type;
+      // Filling the message reuses its buffers (sized before the loop), as the pipeline's slots do.
+      in.images[0] = left[static_cast<std::size_t>(k)];
+      in.images[1] = right[static_cast<std::size_t>(k)];
+      in.motion[0].copyFrom(field);
+      in.motion[1].copyFrom(field);
+      in.has_motion = true;
       in.t_ns = k;
+      in.frame_index = k;
       frontend.track(in, out, stats);
       if (k == 0) first_frame_allocations = voca::test::g_allocations.load() - before;
       if (k >= 2) {

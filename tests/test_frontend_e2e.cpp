@@ -143,10 +143,12 @@ RunResult runFrontend(const FrontendConfig& config, const StereoRig& rig, const 
   RunResult result;
   TrackedStereoFrame out;
   for (const Frame& f : frames) {
-    FrontendInput in;
-    in.images = {f.left.view(), f.right.view()};
-    if (f.has_motion) in.motion = {&f.motion_left, &f.motion_right};
-    in.picture_type = f.type;
+    DecodedStereoFrame in;
+    in.images = {f.left, f.right};
+    if (f.has_motion) {
+      in.motion = {f.motion_left, f.motion_right};
+      in.has_motion = true;
+    }
     in.t_ns = f.t_ns;
     FrontendStats stats;
     frontend.track(in, out, stats);

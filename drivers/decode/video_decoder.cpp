@@ -370,7 +370,8 @@ bool VideoDecoder::receive(DecodedFrame& out) {
   const int rc = avcodec_receive_frame(d.pixel.get(), frame);
   if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return false;
   if (rc < 0) d.fail(rc, "decoding frame " + std::to_string(d.frames_out));
-  if (d.options.strict && (frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT) != 0)) {
+  const bool damaged = frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT) != 0;
+  if (d.options.strict && damaged) {
     throw InputError(d.source + ": frame " + std::to_string(d.frames_out) +
                      " is corrupt (damaged or missing bitstream data)");
   }
@@ -390,6 +391,7 @@ bool VideoDecoder::receive(DecodedFrame& out) {
     --d.queue_size;
   }
   d.convert(*frame, *vectors, out);
+  out.damaged = damaged;
   return true;
 }
 

@@ -20,6 +20,9 @@ struct DecodedFrame {
   std::int64_t pts = kNoPts;
   std::int64_t frame_index = 0;  // output order, from 0
   MotionField motion;            // empty (no vectors) when motion export is off
+  // Non-strict decoding only: the decoder flagged the picture as damaged (missing or corrupt
+  // bitstream data, concealed). Strict decoding throws instead.
+  bool damaged = false;
 
   // Size the buffers so later frames of at most this size never allocate.
   void reserve(int max_width, int max_height);

@@ -4,6 +4,7 @@
 // (mav0/camN/data.mp4 + data.csv) deliver each camera's compressed packets with the dataset's
 // timestamps, for the pipeline's decode stage.
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -39,7 +40,7 @@ class ImageDatasetSource : public StereoSource {
   SourceInfo info_;
   std::size_t count_ = 0;
   std::size_t index_ = 0;
-  bool interrupted_ = false;
+  std::atomic<bool> interrupted_{false};
 };
 
 // A VOCA video folder: both cameras' packets in lockstep, frame i stamped with data.csv's row i.
@@ -64,7 +65,7 @@ class VideoFolderSource : public StereoSource {
   std::array<std::unique_ptr<decode::Demuxer>, 2> demuxers_;
   std::size_t count_ = 0;
   std::size_t index_ = 0;
-  bool interrupted_ = false;
+  std::atomic<bool> interrupted_{false};
   bool ended_ = false;
   std::vector<std::string> warnings_;
 };

@@ -12,8 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/vo/vo_runner.h"
+#include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
-#include "tools/voca/run_vo.h"
+#include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -81,39 +83,50 @@ int runDemo(const DemoOptions& o) {
   struct Variant {
     voca::PriorMode mode;
     const char* label;
-    voca::cli::VoRunResult result;
+    voca::pipeline::VoRunResult result;
     fs::path trajectory;
   };
   std::vector<Variant> variants = {{voca::PriorMode::kNone, "baseline (none)", {}, {}},
                                    {voca::PriorMode::kMvParallelOf, "VOCA (mv_parallel_of)", {}, {}}};
+  voca::platform::installStopHandlers();
   for (Variant& v : variants) {
-    voca::cli::VoRunOptions options;
+    voca::pipeline::VoRunOptions options;
     options.input = video;
     options.mode = v.mode;
     options.progress = false;
-    v.result = voca::cli::runVisualOdometry(options);
     v.trajectory = out / fmt::format("traj_{}.txt", voca::priorModeName(v.mode));
-    voca::saveTrajectory(v.result.trajectory, v.trajectory, voca::TrajectoryFormat::kTum);
+    options.trajectory_file = v.trajectory;
+    v.result = voca::pipeline::runVisualOdometry(options);
+    if (v.result.pipeline.error || v.result.stop_signal != 0) {
+      voca::cli::PipelineCli defaults;
+      return voca::cli::reportRunEnd(v.result, defaults, "demo");
+    }
   }
 
   const fs::path overlay = out / "overlay_mv_parallel_of.mp4";
   fmt::print(stderr, "[4/4] overlay of the VOCA tracks with `voca track --overlay`\n");
   runSubcommand("track", {video.string(), "--mode", "mv_parallel_of", "--overlay", overlay.string()});
 
-  const auto cell = [](const voca::cli::VoRunResult& r, int what) -> std::string {
+  const auto stageMedianMs = [](const voca::pipeline::VoRunResult& r, std::string_view stage) {
+    for (const voca::pipeline::StageReport& s : r.pipeline.stages) {
+      if (s.name == stage) return static_cast<double>(s.service.quantileNs(0.5)) * 1e-6;
+    }
+    return 0.0;
+  };
+  const auto cell = [&](const voca::pipeline::VoRunResult& r, int what) -> std::string {
     switch (what) {
       case 0:
         return r.eval ? fmt::format("{:.4f}", r.eval->ate.stats.rmse) : "-";
       case 1:
         return r.eval && r.eval->rte ? fmt::format("{:.4f}", r.eval->rte->stats.rmse) : "-";
       case 2:
-        return fmt::format("{}", r.resets + r.lost);
+        return fmt::format("{}", r.backend.resets + r.backend.lost);
       case 3:
-        return fmt::format("{}", r.keyframes);
+        return fmt::format("{}", r.backend.keyframes);
       case 4:
-        return fmt::format("{:.2f}", voca::cli::medianOf(r.frontend_ms));
+        return fmt::format("{:.2f}", stageMedianMs(r, "frontend"));
       default:
-        return fmt::format("{:.2f}", voca::cli::medianOf(r.backend_ms));
+        return fmt::format("{:.2f}", stageMedianMs(r, "backend"));
     }
   };
   const char* rows[] = {"ATE [m]",   "RTE 6 frames [m]",           "resets + lost frames",

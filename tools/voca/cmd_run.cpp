@@ -1,5 +1,5 @@
-// `voca run`: the full single-threaded VO on a dataset or VOCA video folder (frontend + backend),
-// writing the causal trajectory and printing frames, keyframes, resets, timings and ATE/RTE.
+// `voca run`: the full VO on a dataset or VOCA video folder through the staged pipeline, writing the
+// causal trajectory as it is estimated and printing frames, keyframes, resets, timings and ATE/RTE.
 
 #include <fmt/core.h>
 
@@ -7,8 +7,9 @@
 #include <string>
 
 #include "drivers/encode/video_encoder.h"
+#include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
-#include "tools/voca/run_vo.h"
+#include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -19,34 +20,30 @@ struct RunOptions {
   std::string input, calib, config, mode, encode, out, gt, format = "tum";
   int frames = 0;
   int max_points = 1000;
+  voca::cli::PipelineCli pipeline;
 };
 
 int runRun(const RunOptions& o) {
-  voca::cli::VoRunOptions options;
+  voca::pipeline::VoRunOptions options;
   options.input = o.input;
   if (!o.calib.empty()) options.calibration = o.calib;
   if (!o.config.empty()) options.config = o.config;
   if (!o.gt.empty()) options.ground_truth = o.gt;
-  if (!o.mode.empty()) {
-    options.mode = voca::parsePriorMode(o.mode);
-    if (!options.mode) {
-      throw voca::InputError(fmt::format(
-          "--mode: unknown mode \"{}\" (expected none, mv, of_then_mv, mv_then_of or mv_parallel_of)", o.mode));
-    }
-  }
+  if (!o.mode.empty()) options.mode = voca::requirePriorMode(o.mode, "--mode");
   if (!o.encode.empty()) options.encode_bitrate_bps = voca::encode::parseBitrate(o.encode);
   if (o.frames < 0) throw voca::InputError("--frames: expected 0 (all) or a positive count");
   options.max_frames = o.frames;
   options.max_points = o.max_points;
   const auto format = voca::parseTrajectoryFormat(o.format);
-  if (!format || *format == voca::TrajectoryFormat::kKitti) {
-    throw voca::InputError(fmt::format("--format: expected tum or euroc, got \"{}\"", o.format));
-  }
-  const voca::cli::VoRunResult result = voca::cli::runVisualOdometry(options);
-  voca::saveTrajectory(result.trajectory, o.out, *format);
-  voca::cli::printRunSummary(result);
+  if (!format) throw voca::InputError(fmt::format("--format: expected tum, euroc or kitti, got \"{}\"", o.format));
+  options.trajectory_file = o.out;
+  options.trajectory_format = *format;
+  voca::cli::applyPipelineOptions(o.pipeline, options);
+  voca::platform::installStopHandlers();
+  const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
+  voca::pipeline::printRunSummary(result, stdout);
   fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
-  return 0;
+  return voca::cli::reportRunEnd(result, o.pipeline, "run");
 }
 
 const bool registered = voca::cli::registerCommand({
@@ -57,23 +54,28 @@ const bool registered = voca::cli::registerCommand({
       auto o = std::make_shared<RunOptions>();
       app.add_option("input", o->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
       app.add_option("--calib", o->calib, "Calibration file (default: the one found with the dataset)");
-      app.add_option("--config", o->config, "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for KITTI folders)");
-      app.add_option("--mode", o->mode,
-                     "Prior mode: none, mv, of_then_mv, mv_then_of, mv_parallel_of (overrides the config)");
+      app.add_option("--config", o->config,
+                     "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for "
+                     "KITTI folders)");
+      app.add_option("--mode", o->mode, "Prior mode: " + voca::priorModeList() + " (overrides the config)");
       app.add_option("--encode", o->encode,
                      "Raw datasets: encode at this bitrate (e.g. 500k) to a temporary VOCA folder first");
-      app.add_option("--out,-o", o->out, "Trajectory file to write")->required();
-      app.add_option("--format", o->format, "Trajectory format: tum or euroc")->capture_default_str();
+      app.add_option("--out,-o", o->out, "Trajectory file to write (one row per frame, flushed as estimated)")
+          ->required();
+      app.add_option("--format", o->format, "Trajectory format: tum, euroc or kitti (3x4 rows, no timestamps)")
+          ->capture_default_str();
       app.add_option("--gt", o->gt,
                      "Ground truth for ATE/RTE (TUM/EuRoC/KITTI; default: the dataset's own, when it has one)");
       app.add_option("--frames", o->frames, "Process only the first N frames (0 = all)")->capture_default_str();
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
+      voca::cli::addPipelineOptions(app, o->pipeline);
       app.footer(
-          "Single-threaded: each frame is tracked, then estimated, and its pose written as it was estimated\n"
-          "then (causal; later window refinements never rewrite it). Poses are in the calibration's body\n"
-          "frame (T_world_body = T_world_cam0 T_body_cam0^-1), so they compare directly with the dataset's\n"
-          "ground truth; the world frame is the body pose of the first frame. Resets (tracking failure,\n"
-          "re-initialised at the last good pose) are reported on stderr and counted.");
+          "Each frame is tracked, then estimated, and its pose written as it was estimated then (causal; later\n"
+          "window refinements never rewrite it). Poses are in the calibration's body frame (T_world_body =\n"
+          "T_world_cam0 T_body_cam0^-1), so they compare directly with the dataset's ground truth; the world\n"
+          "frame is the body pose of the first frame. Resets (tracking failure, re-initialised at the last\n"
+          "good pose) are reported on stderr and counted.\n\n" +
+          voca::cli::pipelineHelpFooter());
       return [o] { return runRun(*o); };
     },
 });

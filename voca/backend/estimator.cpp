@@ -908,7 +908,11 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
 
   ++frames_since_kf_;
   dropNonKeyframes(-1);
-  const SE3d predicted = previous_T_w_c_ * velocity_;
+  // Frames skipped before this one (dropped or damaged): the constant-velocity guess and the motion
+  // bounds span all the intervals since the previous frame.
+  const int intervals = 1 + std::max(0, frame.frames_missing_before);
+  const SE3d predicted =
+      previous_T_w_c_ * (intervals == 1 ? velocity_ : SE3d::exp(velocity_.log() * static_cast<double>(intervals)));
   const int n = allocateFrame(frame, predicted);
   attachObservations(n);
   optimizePose(n);
@@ -945,8 +949,8 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   }
   if (est.num_inliers < config_.min_inliers) return fail(FailureReason::kTooFewInliers);
   if (est.rms_reprojection_px > config_.max_rms_reprojection_px) return fail(FailureReason::kExplodingCost);
-  if (step.translation().norm() > config_.max_translation_per_frame_m ||
-      step.so3().angle() > config_.max_rotation_per_frame_deg * M_PI / 180.0) {
+  if (step.translation().norm() > config_.max_translation_per_frame_m * intervals ||
+      step.so3().angle() > config_.max_rotation_per_frame_deg * M_PI / 180.0 * intervals) {
     return fail(FailureReason::kImpossibleMotion);
   }
 
@@ -960,7 +964,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
     est.num_landmarks = num_landmarks_;
   }
   est.state = TrackingState::kTracking;
-  velocity_ = step;
+  velocity_ = intervals == 1 ? step : SE3d::exp(step.log() / static_cast<double>(intervals));
   previous_T_w_c_ = T_w_c;
   last_good_T_w_c_ = T_w_c;
   return finish(T_w_c);

@@ -23,6 +23,9 @@ struct TrackedStereoFrame {
 
   std::int64_t t_ns = 0;
   std::int64_t frame_index = 0;
+  // Source frames skipped just before this one (dropped or damaged): the motion since the previous
+  // tracked frame spans frames_missing_before + 1 frame intervals.
+  int frames_missing_before = 0;
   std::array<std::vector<KeypointObservation>, kNumCameras> observations;
 
   void reserve(std::size_t max_points) {

@@ -123,10 +123,6 @@ void KltFrontend::computeRightOverlap(const StereoRig& rig) {
   }
 }
 
-void KltFrontend::setAverageDepth(double depth_m) {
-  if (std::isfinite(depth_m) && depth_m > 0.0) average_depth_m_ = depth_m;
-}
-
 void KltFrontend::CameraState::resetSlots() {
   free_slots.clear();
   const int count = static_cast<int>(pool.size()) / num_levels;
@@ -173,18 +169,20 @@ bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const Ima
   return true;
 }
 
-const MotionField* KltFrontend::priorField(int camera, const FrontendInput& input, FrontendStats& stats) {
-  const MotionField* field = input.motion[static_cast<std::size_t>(camera)];
-  if (field == nullptr || config_.prior_mode == PriorMode::kNone) return nullptr;
+const MotionField* KltFrontend::priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
+  if (!input.has_motion || config_.prior_mode == PriorMode::kNone) return nullptr;
+  const MotionField* field = &input.motion[static_cast<std::size_t>(camera)];
   CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
   if (field->hasVectors()) {
     if (config_.bridge_iframes) {
       cam.last_p_frame.copyFrom(*field);
       cam.have_last_p_frame = true;
     }
-    return field;
+    // After a gap the vectors describe the motion from a picture the tracker never saw.
+    return input.frames_missing_before == 0 ? field : nullptr;
   }
-  const bool intra = input.picture_type == PictureType::kI || field->pictureType() == PictureType::kI;
+  if (input.frames_missing_before > 0) return nullptr;
+  const bool intra = field->pictureType() == PictureType::kI;
   if (config_.bridge_iframes && intra && cam.have_last_p_frame) {
     stats.bridged[static_cast<std::size_t>(camera)] = true;
     return &cam.last_p_frame;
@@ -311,13 +309,13 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   std::swap(cam.slots, cam.next_slots);
 }
 
-void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stats) {
+void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats) {
   CameraState& left = cameras_[0];
   CameraState& right = cameras_[1];
   new_points_.clear();
   const int room = max_points_ - static_cast<int>(left.points.size());
   if (room <= 0) return;
-  stats.detected = detector_.detect(input.images[0], left.points, detector_params_, room, new_points_);
+  stats.detected = detector_.detect(input.images[0].view(), left.points, detector_params_, room, new_points_);
   const double depth =
       config_.matching_guess == StereoGuess::kAverageDepth ? average_depth_m_ : config_.matching_default_depth_m;
   const int right_room = max_points_ - static_cast<int>(right.points.size());
@@ -349,13 +347,13 @@ void KltFrontend::detectAndMatch(const FrontendInput& input, FrontendStats& stat
   }
 }
 
-void KltFrontend::detectRightOnly(const FrontendInput& input, FrontendStats& stats) {
+void KltFrontend::detectRightOnly(const DecodedStereoFrame& input, FrontendStats& stats) {
   CameraState& right = cameras_[1];
   new_points_.clear();
   const int room = max_points_ - static_cast<int>(right.points.size());
   if (room <= 0) return;
   stats.detected_right_only =
-      detector_.detect(input.images[1], right.points, right_detector_params_, room, new_points_, right_overlap_);
+      detector_.detect(input.images[1].view(), right.points, right_detector_params_, room, new_points_, right_overlap_);
   // Ids are issued in increasing order, so the right list stays sorted for filterEpipolar's merge.
   for (const Eigen::Vector2f& p : new_points_) {
     const int slot = right.acquire();
@@ -398,22 +396,23 @@ void KltFrontend::filterEpipolar(FrontendStats& stats) {
   right.slots.resize(out);
 }
 
-void KltFrontend::track(const FrontendInput& input, TrackedStereoFrame& out, FrontendStats& stats) {
+void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
   const auto start = std::chrono::steady_clock::now();
   for (int c = 0; c < 2; ++c) {
-    const GrayView& image = input.images[static_cast<std::size_t>(c)];
-    if (image.width != width_ || image.height != height_) {
-      throw InputError(fmt::format("frontend: camera {} image is {}x{}, the calibration says {}x{}", c, image.width,
-                                   image.height, width_, height_));
+    const GrayImage& image = input.images[static_cast<std::size_t>(c)];
+    if (image.width() != width_ || image.height() != height_) {
+      throw InputError(fmt::format("frontend: camera {} image is {}x{}, the calibration says {}x{}", c, image.width(),
+                                   image.height(), width_, height_));
     }
   }
   stats.reserve(static_cast<std::size_t>(max_points_));
   stats.clear();
-  stats.frame_index = frame_index_;
+  stats.frame_index = input.frame_index;
+  if (std::isfinite(input.depth_hint_m) && input.depth_hint_m > 0.0) average_depth_m_ = input.depth_hint_m;
   for (int c = 0; c < 2; ++c) {
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     cam.current = 1 - cam.current;
-    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)]);
+    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)].view());
   }
   for (int c = 0; c < 2; ++c) {
     if (have_previous_) {
@@ -431,7 +430,8 @@ void KltFrontend::track(const FrontendInput& input, TrackedStereoFrame& out, Fro
   out.reserve(static_cast<std::size_t>(max_points_));
   out.clear();
   out.t_ns = input.t_ns;
-  out.frame_index = frame_index_++;
+  out.frame_index = input.frame_index;
+  out.frames_missing_before = input.frames_missing_before;
   for (int c = 0; c < 2; ++c) {
     const CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     auto& observations = out.observations[static_cast<std::size_t>(c)];

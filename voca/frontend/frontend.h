@@ -10,6 +10,7 @@
 
 #include "voca/calib/calibration.h"
 #include "voca/core/image.h"
+#include "voca/core/stereo_frame.h"
 #include "voca/core/tracked_frame.h"
 #include "voca/frontend/detector.h"
 #include "voca/frontend/frontend_config.h"
@@ -24,14 +25,6 @@ struct FrontendCapacities {
   int max_points = 500;  // per camera (template memory: about 6 KB per point and camera)
   int max_width = 0;     // 0 = the calibration's image size
   int max_height = 0;
-};
-
-// One stereo frame to track: both gray images and, for decoded video, both motion fields.
-struct FrontendInput {
-  std::array<GrayView, 2> images;
-  std::array<const MotionField*, 2> motion{nullptr, nullptr};  // nullptr for raw images
-  PictureType picture_type = PictureType::kUnknown;
-  std::int64_t t_ns = 0;
 };
 
 // Temporal tracking of one camera in one frame.
@@ -86,10 +79,10 @@ class KltFrontend {
 
   // Tracks the previous frame's points into this frame, detects new left points in empty cells and
   // matches them into the right image. Images must have the calibration's size (at most the capacity).
-  void track(const FrontendInput& input, TrackedStereoFrame& out, FrontendStats& stats);
-
-  // Depth for the stereo guess in StereoGuess::kAverageDepth mode (the backend's current estimate).
-  void setAverageDepth(double depth_m);
+  // In StereoGuess::kAverageDepth mode the stereo guess uses the frame's depth_hint_m (the last
+  // positive hint seen; the default depth until then). out carries the frame's t_ns, frame_index and
+  // frames_missing_before.
+  void track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
   // Forgets every track (the next frame starts from detection).
   void reset();
 
@@ -140,10 +133,10 @@ class KltFrontend {
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                      const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
                      std::span<PatchTemplate> backward) const;
-  const MotionField* priorField(int camera, const FrontendInput& input, FrontendStats& stats);
+  const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
-  void detectAndMatch(const FrontendInput& input, FrontendStats& stats);
-  void detectRightOnly(const FrontendInput& input, FrontendStats& stats);
+  void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
+  void detectRightOnly(const DecodedStereoFrame& input, FrontendStats& stats);
   // Right-image grid cells that the left camera sees (blocked for right-only detection).
   void computeRightOverlap(const StereoRig& rig);
   void filterEpipolar(FrontendStats& stats);
@@ -165,7 +158,6 @@ class KltFrontend {
   std::vector<Eigen::Vector2f> new_points_;
   std::array<CameraState, 2> cameras_;
   std::uint64_t next_track_id_ = 1;
-  std::int64_t frame_index_ = 0;
   bool have_previous_ = false;
 };
 

@@ -24,11 +24,25 @@ std::string_view priorModeName(PriorMode mode) {
 }
 
 std::optional<PriorMode> parsePriorMode(std::string_view name) {
-  for (PriorMode mode :
-       {PriorMode::kNone, PriorMode::kMv, PriorMode::kOfThenMv, PriorMode::kMvThenOf, PriorMode::kMvParallelOf}) {
+  for (PriorMode mode : kAllPriorModes) {
     if (priorModeName(mode) == name) return mode;
   }
   return std::nullopt;
+}
+
+std::string priorModeList() {
+  std::string list;
+  for (std::size_t i = 0; i < kAllPriorModes.size(); ++i) {
+    list += i == 0 ? "" : i + 1 == kAllPriorModes.size() ? " or " : ", ";
+    list += priorModeName(kAllPriorModes[i]);
+  }
+  return list;
+}
+
+PriorMode requirePriorMode(std::string_view name, std::string_view what) {
+  const std::optional<PriorMode> mode = parsePriorMode(name);
+  if (!mode) throw InputError(fmt::format("{}: unknown mode \"{}\" (expected {})", what, name, priorModeList()));
+  return *mode;
 }
 
 std::string_view stereoGuessName(StereoGuess guess) {

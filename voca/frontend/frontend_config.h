@@ -1,6 +1,7 @@
 #pragma once
 // Parameters of the KLT frontend (the JSON "frontend" section; defaults are the paper's EuRoC values).
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -23,8 +24,15 @@ enum class StereoGuess : std::uint8_t {
   kAverageDepth,  // reprojection at the backend's average depth (setAverageDepth), default until set
 };
 
+inline constexpr std::array<PriorMode, 5> kAllPriorModes = {PriorMode::kNone, PriorMode::kMv, PriorMode::kOfThenMv,
+                                                            PriorMode::kMvThenOf, PriorMode::kMvParallelOf};
+
 std::string_view priorModeName(PriorMode mode);
 std::optional<PriorMode> parsePriorMode(std::string_view name);
+// "none, mv, of_then_mv, mv_then_of or mv_parallel_of", for help texts and messages.
+std::string priorModeList();
+// parsePriorMode, or InputError "<what>: unknown mode "x" (expected none, mv, ...)".
+PriorMode requirePriorMode(std::string_view name, std::string_view what);
 std::string_view stereoGuessName(StereoGuess guess);
 std::optional<StereoGuess> parseStereoGuess(std::string_view name);
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "voca/core/error.h"
+#include "voca/trajectory/trajectory_writer.h"
 
 namespace voca {
 
@@ -215,13 +216,6 @@ TrajectoryFormat detectFromRows(const Path& path, const std::vector<Row>& rows) 
                   where(path, row.line), fields));
 }
 
-// Writes "<seconds>.<9 digits>" exactly.
-std::string formatSeconds(int64_t t_ns) {
-  const bool negative = t_ns < 0;
-  const uint64_t magnitude = negative ? uint64_t(0) - static_cast<uint64_t>(t_ns) : static_cast<uint64_t>(t_ns);
-  return fmt::format("{}{}.{:09d}", negative ? "-" : "", magnitude / 1'000'000'000u, magnitude % 1'000'000'000u);
-}
-
 }  // namespace
 
 std::string_view trajectoryFormatName(TrajectoryFormat format) {
@@ -348,40 +342,9 @@ Trajectory loadTrajectory(const Path& path, std::optional<TrajectoryFormat> form
 }
 
 void saveTrajectory(const Trajectory& trajectory, const Path& path, TrajectoryFormat format) {
-  std::ofstream out(path);
-  if (!out) throw InputError(fmt::format("cannot write trajectory file {}", path.string()));
-  if (format == TrajectoryFormat::kEuroc) {
-    out << "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n";
-  } else if (format == TrajectoryFormat::kTum) {
-    out << "# timestamp tx ty tz qx qy qz qw\n";
-  }
-  std::string line;
-  for (const TimedPose& pose : trajectory.poses) {
-    const Eigen::Vector3d& p = pose.T_world_body.translation();
-    const Eigen::Quaterniond& q = pose.T_world_body.unitQuaternion();
-    line.clear();
-    switch (format) {
-      case TrajectoryFormat::kTum:
-        // fmt's "{}" is the shortest text that reads back to the same double.
-        line = fmt::format("{} {} {} {} {} {} {} {}\n", formatSeconds(pose.t_ns), p.x(), p.y(), p.z(), q.x(), q.y(),
-                           q.z(), q.w());
-        break;
-      case TrajectoryFormat::kEuroc:
-        line = fmt::format("{},{},{},{},{},{},{},{}\n", pose.t_ns, p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
-        break;
-      case TrajectoryFormat::kKitti: {
-        const Eigen::Matrix<double, 3, 4> m = pose.T_world_body.matrix3x4();
-        for (int r = 0; r < 3; ++r) {
-          for (int c = 0; c < 4; ++c) line += fmt::format("{}{}", (r == 0 && c == 0) ? "" : " ", m(r, c));
-        }
-        line += '\n';
-        break;
-      }
-    }
-    out << line;
-  }
-  out.flush();
-  if (!out) throw InputError(fmt::format("error writing trajectory file {}", path.string()));
+  TrajectoryWriter writer(path, format);
+  for (const TimedPose& pose : trajectory.poses) writer.append(pose);
+  writer.close();
 }
 
 Trajectory changeBodyFrame(const Trajectory& trajectory, const SE3d& T_body_new) {

@@ -1,0 +1,53 @@
+#pragma once
+// One frame's place in the pipeline: every message it becomes on its way (DESIGN.md section 2) and
+// the timestamps of every stage it passed. Slots are allocated once, in a pool, when the pipeline is
+// built; a frame moves from stage to stage as a pointer to its slot, and whoever holds the pointer
+// owns the slot.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "drivers/source/stereo_source.h"
+#include "voca/backend/estimator.h"
+#include "voca/core/stereo_frame.h"
+#include "voca/core/tracked_frame.h"
+#include "voca/frontend/frontend.h"
+
+namespace voca::pipeline {
+
+// The most stages a pipeline has: source, encode, decode, frontend, backend, sink.
+inline constexpr int kMaxStages = 8;
+
+// When one stage worked on a frame: monotonic clock (platform::monotonicNs), and the CPU time its
+// thread spent.
+struct StageTiming {
+  std::int64_t start_ns = 0;
+  std::int64_t end_ns = 0;
+  std::int64_t cpu_ns = 0;
+  std::int64_t cpu_start_ns = 0;
+};
+
+struct FrameSlot {
+  int pool_index = 0;
+  int owner_stage = -1;         // the stage working on it (the runner's bookkeeping)
+  std::int64_t sequence = 0;    // order in which the source produced the frame, from 0
+  std::int64_t arrival_ns = 0;  // monotonic time the frame became available (captured, received or read)
+  std::array<StageTiming, kMaxStages> timing{};
+
+  RawStereoFrame raw;           // raw sources; the encode stage's input
+  EncodedStereoPacket encoded;  // video sources; the encode stage's output, the decode stage's input
+  DecodedStereoFrame frame;     // the frontend's input
+  TrackedStereoFrame tracked;   // the frontend's output, the backend's input
+  FrontendStats frontend_stats;
+  std::vector<PointTrace> left_traces;  // the left camera's temporal step, kept for overlays
+  PoseEstimate pose;                    // the backend's output
+
+  // Source frame index of the frame (stamped by the source).
+  std::int64_t frameIndex() const { return frame.frame_index; }
+
+  // Sizes every buffer for frames up to width x height and max_points points per camera.
+  void reserve(int width, int height, int max_points);
+};
+
+}  // namespace voca::pipeline

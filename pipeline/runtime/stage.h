@@ -1,0 +1,75 @@
+#pragma once
+// The stages of the pipeline and how they hand frames on. A stage computes; the runner decides on
+// which thread it runs and what happens between stages (queues, back-pressure, drops), so a
+// pipelined run computes exactly what a single-threaded one does.
+//
+// Lifecycle: constructing a stage allocates what it needs; start() runs once on the thread that
+// will run the stage (warm-up allocations belong there); process() handles one frame; finish() runs
+// once at the end of the stream and emits what the stage still holds.
+
+#include <cstdint>
+#include <string_view>
+
+#include "pipeline/runtime/frame_slot.h"
+
+namespace voca::pipeline {
+
+// Why a slot leaves the pipeline before its last stage.
+enum class ReleaseReason : std::uint8_t {
+  kDone,     // passed every stage
+  kDropped,  // the live policy dropped it: a later frame was waiting
+  kDamaged,  // its data could not be decoded; skipped
+  kAborted,  // a stage failed; the pipeline is shutting down
+};
+
+// Where a stage sends slots: on to the next stage, or out of the pipeline.
+class Emitter {
+ public:
+  virtual void forward(FrameSlot& slot) = 0;
+  virtual void release(FrameSlot& slot, ReleaseReason reason) = 0;
+
+ protected:
+  ~Emitter() = default;
+};
+
+// What a stage may ask the runner while it works.
+class StageContext {
+ public:
+  // True once a stage failed or the run is being torn down: a stage waiting for something that
+  // will never come (e.g. a depth hint from a failed backend) gives up and releases its slot.
+  virtual bool aborting() const = 0;
+
+ protected:
+  ~StageContext() = default;
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  // Short name used in reports and traces: "decode", "frontend", ...
+  virtual std::string_view name() const = 0;
+  // Whether the live policy may drop frames waiting in front of this stage (a decoder needs every
+  // packet; a tracker can skip a frame).
+  virtual bool canSkipInput() const { return false; }
+  // Rough share of a frame's work, used to balance stages over a given number of threads.
+  virtual int relativeCost() const { return 1; }
+  virtual void start(const StageContext& /*context*/) {}
+  // Handles one frame: calls out.forward() for each slot that goes on (zero or more, in order; a
+  // stage may hold a slot and forward it later) or out.release().
+  virtual void process(FrameSlot& slot, Emitter& out) = 0;
+  virtual void finish(Emitter& /*out*/) {}
+};
+
+// The first stage: fills slots from an input.
+class SourceStage {
+ public:
+  virtual ~SourceStage() = default;
+  virtual std::string_view name() const = 0;
+  virtual void start(const StageContext& /*context*/) {}
+  // Fills the slot with the next frame (message, frame index, t_ns, arrival_ns); false at the end.
+  virtual bool produce(FrameSlot& slot) = 0;
+  // Makes a blocking produce() return false soon; called from another thread.
+  virtual void interrupt() {}
+};
+
+}  // namespace voca::pipeline

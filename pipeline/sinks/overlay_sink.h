@@ -1,0 +1,30 @@
+#pragma once
+// A video of the left camera with each point's temporal step drawn (the paper's Fig. 1): blue dot =
+// previous position, yellow cross and line = motion-vector prior, green circle and line = converged
+// position (red when rejected), cyan = new detection.
+
+#include <filesystem>
+#include <memory>
+
+#include "drivers/decode/rgb_video_writer.h"
+#include "pipeline/sinks/sink_stage.h"
+#include "voca/core/image.h"
+
+namespace voca::pipeline {
+
+// Draws the overlay of one frame into out (resized to the image).
+void renderTrackOverlay(const GrayImage& left, std::span<const PointTrace> traces,
+                        std::span<const KeypointObservation> observations, RgbImage& out);
+
+class OverlaySink final : public FrameSink {
+ public:
+  OverlaySink(const std::filesystem::path& file, int fps, int width, int height);
+  void consume(const FrameSlot& slot) override;
+  void finish() override;
+
+ private:
+  decode::RgbVideoWriter writer_;
+  RgbImage image_;
+};
+
+}  // namespace voca::pipeline

@@ -1,0 +1,36 @@
+#pragma once
+// The last stage: hands every finished frame to the sinks (trajectory file, statistics, overlay
+// video, progress), in frame order, on one thread.
+
+#include <vector>
+
+#include "pipeline/runtime/stage.h"
+
+namespace voca::pipeline {
+
+// A consumer of finished frames. consume() is called once per frame in order; finish() once at the
+// end (also after a stop or a failure), and writes what the sink still holds.
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  virtual void consume(const FrameSlot& slot) = 0;
+  virtual void finish() {}
+};
+
+class SinkStage final : public Stage {
+ public:
+  explicit SinkStage(std::vector<FrameSink*> sinks) : sinks_(std::move(sinks)) {}
+  std::string_view name() const override { return "write"; }
+  void process(FrameSlot& slot, Emitter& out) override {
+    for (FrameSink* sink : sinks_) sink->consume(slot);
+    out.forward(slot);
+  }
+  void finish(Emitter& /*out*/) override {
+    for (FrameSink* sink : sinks_) sink->finish();
+  }
+
+ private:
+  std::vector<FrameSink*> sinks_;
+};
+
+}  // namespace voca::pipeline

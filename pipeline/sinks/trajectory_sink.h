@@ -1,0 +1,31 @@
+#pragma once
+// Streams each pose to the trajectory file as soon as it is estimated (flushed per row), and keeps
+// the trajectory in memory for evaluation when asked to.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "pipeline/sinks/sink_stage.h"
+#include "voca/trajectory/trajectory.h"
+#include "voca/trajectory/trajectory_writer.h"
+
+namespace voca::pipeline {
+
+class TrajectorySink final : public FrameSink {
+ public:
+  // file: nullopt writes no file. reserve_poses: poses kept in memory without reallocating (the
+  // expected frame count; 0 keeps none).
+  TrajectorySink(const std::optional<std::filesystem::path>& file, TrajectoryFormat format, std::size_t reserve_poses);
+  void consume(const FrameSlot& slot) override;
+  void finish() override;
+
+  const Trajectory& trajectory() const { return trajectory_; }
+
+ private:
+  std::unique_ptr<TrajectoryWriter> writer_;
+  Trajectory trajectory_;
+  bool keep_;
+};
+
+}  // namespace voca::pipeline

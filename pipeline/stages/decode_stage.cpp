@@ -1,0 +1,146 @@
+#include "pipeline/stages/decode_stage.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <array>
+#include <utility>
+
+#include "voca/core/error.h"
+
+namespace voca::pipeline {
+
+namespace {
+
+// Frames a decoder may hold back before the stage gives up on it (hardware decoders hold a few).
+constexpr std::size_t kMaxPending = 32;
+
+}  // namespace
+
+struct DecodeStage::Impl {
+  struct Pending {
+    FrameSlot* slot = nullptr;
+    std::array<std::int64_t, 2> pts{};
+    std::array<bool, 2> resolved{};  // the camera's picture came out, or is known to be missing
+    bool damaged = false;
+    std::string why;  // for strict-mode errors
+  };
+
+  DecodeStageOptions options;
+  std::array<std::unique_ptr<decode::VideoDecoder>, 2> decoders;
+  std::array<decode::DecodedFrame, 2> scratch;
+  std::array<Pending, kMaxPending> pending;  // a ring, oldest at head
+  std::size_t head = 0, size = 0;
+
+  Pending& at(std::size_t i) { return pending[(head + i) % kMaxPending]; }
+
+  void markDamaged(Pending& p, int camera, const std::string& why) {
+    p.resolved[static_cast<std::size_t>(camera)] = true;
+    if (!p.damaged) p.why = fmt::format("{}: {}", options.names[static_cast<std::size_t>(camera)], why);
+    p.damaged = true;
+  }
+
+  // A picture of `camera` came out: it belongs to the oldest waiting frame with its pts; frames before
+  // that one never got theirs.
+  void match(int camera, decode::DecodedFrame& picture) {
+    const auto c = static_cast<std::size_t>(camera);
+    std::size_t target = size;
+    for (std::size_t i = 0; i < size; ++i) {
+      const Pending& p = at(i);
+      if (p.resolved[c]) continue;
+      if (picture.pts == decode::kNoPts || p.pts[c] == decode::kNoPts || p.pts[c] == picture.pts) {
+        target = i;
+        break;
+      }
+    }
+    if (target == size) {
+      throw RuntimeFailure(
+          fmt::format("{}: the decoder produced a picture (pts {}) for no packet sent", options.names[c], picture.pts));
+    }
+    for (std::size_t i = 0; i < target; ++i) {
+      if (!at(i).resolved[c]) markDamaged(at(i), camera, "its picture never came out of the decoder (damaged data)");
+    }
+    Pending& p = at(target);
+    p.resolved[c] = true;
+    DecodedStereoFrame& frame = p.slot->frame;
+    // Hand the decoded buffers over without copying; the decoder keeps the slot's old ones.
+    std::swap(frame.images[c], picture.luma);
+    std::swap(frame.motion[c], picture.motion);
+    if (picture.damaged) markDamaged(p, camera, "damaged or missing bitstream data (concealed by the decoder)");
+  }
+
+  void drain(int camera) {
+    decode::DecodedFrame& picture = scratch[static_cast<std::size_t>(camera)];
+    while (decoders[static_cast<std::size_t>(camera)]->receive(picture)) match(camera, picture);
+  }
+
+  void emitReady(Emitter& out) {
+    while (size > 0 && at(0).resolved[0] && at(0).resolved[1]) {
+      Pending p = std::move(at(0));
+      at(0) = Pending{};
+      head = (head + 1) % kMaxPending;
+      --size;
+      if (!p.damaged) {
+        p.slot->frame.has_motion = options.decoder.export_motion;
+        out.forward(*p.slot);
+      } else if (options.decoder.strict) {
+        throw InputError(fmt::format("frame {} is damaged ({})", p.slot->frameIndex(), p.why));
+      } else {
+        out.release(*p.slot, ReleaseReason::kDamaged);
+      }
+    }
+  }
+};
+
+DecodeStage::DecodeStage(const std::array<decode::StreamInfo, 2>& streams, const DecodeStageOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->options = options;
+  for (std::size_t c = 0; c < 2; ++c) {
+    impl_->decoders[c] = std::make_unique<decode::VideoDecoder>(streams[c], options.decoder, nullptr, options.names[c]);
+    impl_->scratch[c].reserve(streams[c].width, streams[c].height);
+  }
+}
+
+DecodeStage::~DecodeStage() = default;
+
+const std::string& DecodeStage::description() const { return impl_->decoders[0]->description(); }
+
+void DecodeStage::process(FrameSlot& slot, Emitter& out) {
+  Impl& d = *impl_;
+  if (d.size == kMaxPending) {
+    throw RuntimeFailure(fmt::format("the decoders hold back more than {} frames", kMaxPending));
+  }
+  Impl::Pending& p = d.at(d.size++);
+  p = Impl::Pending{};
+  p.slot = &slot;
+  for (std::size_t c = 0; c < 2; ++c) p.pts[c] = slot.encoded.packets[c].pts;
+  for (int c = 0; c < 2; ++c) {
+    try {
+      d.decoders[static_cast<std::size_t>(c)]->send(slot.encoded.packets[static_cast<std::size_t>(c)]);
+    } catch (const InputError& e) {
+      // Non-strict decoding reports bad data per frame instead of stopping (strict rethrows).
+      if (d.options.decoder.strict) throw;
+      if (!p.resolved[static_cast<std::size_t>(c)]) d.markDamaged(p, c, e.what());
+    }
+    d.drain(c);
+  }
+  d.emitReady(out);
+}
+
+void DecodeStage::finish(Emitter& out) {
+  Impl& d = *impl_;
+  for (int c = 0; c < 2; ++c) {
+    d.decoders[static_cast<std::size_t>(c)]->sendEnd();
+    d.drain(c);
+  }
+  for (std::size_t i = 0; i < d.size; ++i) {
+    for (int c = 0; c < 2; ++c) {
+      if (!d.at(i).resolved[static_cast<std::size_t>(c)]) {
+        d.markDamaged(d.at(i), c, "the stream ended before its picture was decoded");
+      }
+    }
+  }
+  d.emitReady(out);
+}
+
+}  // namespace voca::pipeline

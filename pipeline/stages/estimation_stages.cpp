@@ -1,0 +1,61 @@
+#include "pipeline/stages/estimation_stages.h"
+
+#include <readerwriterqueue/readerwritercircularbuffer.h>
+
+#include <algorithm>
+
+namespace voca::pipeline {
+
+struct DepthHintChannel::Impl {
+  // The backend is at most a pool's worth of frames behind the frontend; 64 leaves room for any pool.
+  moodycamel::BlockingReaderWriterCircularBuffer<double> queue{64};
+};
+
+DepthHintChannel::DepthHintChannel() : impl_(std::make_unique<Impl>()) {}
+DepthHintChannel::~DepthHintChannel() = default;
+
+void DepthHintChannel::push(double depth_m) { impl_->queue.wait_enqueue(depth_m); }
+
+bool DepthHintChannel::pop(std::int64_t n, const StageContext& context, double& depth_m) {
+  depth_m = 0.0;
+  if (n < kLag) return true;
+  while (!impl_->queue.wait_dequeue_timed(depth_m, 20000)) {
+    if (context.aborting()) return false;
+  }
+  return true;
+}
+
+FrontendStage::FrontendStage(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities,
+                             DepthHintChannel* hints, bool keep_left_traces)
+    : frontend_(config, rig, capacities), hints_(hints), keep_left_traces_(keep_left_traces) {}
+
+void FrontendStage::process(FrameSlot& slot, Emitter& out) {
+  DecodedStereoFrame& frame = slot.frame;
+  // Frames of the source this stage never saw (dropped or damaged), so the tracker and the backend
+  // know the motion since the last frame spans more than one interval.
+  frame.frames_missing_before =
+      last_index_ < 0 ? 0 : static_cast<int>(std::max<std::int64_t>(0, frame.frame_index - last_index_ - 1));
+  last_index_ = frame.frame_index;
+  if (hints_ != nullptr && !hints_->pop(frames_, *context_, frame.depth_hint_m)) {
+    out.release(slot, ReleaseReason::kAborted);
+    return;
+  }
+  ++frames_;
+  frontend_.track(frame, slot.tracked, slot.frontend_stats);
+  if (keep_left_traces_) {
+    const auto traces = frontend_.traces(0);
+    slot.left_traces.assign(traces.begin(), traces.end());
+  }
+  out.forward(slot);
+}
+
+BackendStage::BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints)
+    : estimator_(config, rig), hints_(hints) {}
+
+void BackendStage::process(FrameSlot& slot, Emitter& out) {
+  slot.pose = estimator_.process(slot.tracked);
+  if (hints_ != nullptr) hints_->push(slot.pose.mean_depth_m);
+  out.forward(slot);
+}
+
+}  // namespace voca::pipeline

@@ -1,0 +1,66 @@
+#pragma once
+// The algorithm stages: the KLT frontend and the sliding-window backend, and the channel that
+// brings the backend's depth estimate back to the frontend a fixed number of frames later.
+
+#include <cstdint>
+#include <memory>
+
+#include "pipeline/runtime/stage.h"
+#include "voca/backend/estimator.h"
+#include "voca/calib/calibration.h"
+#include "voca/frontend/frontend.h"
+
+namespace voca::pipeline {
+
+// The backend's mean landmark depth of frame k reaches the frontend for frame k + kLag (counted in
+// frames both stages processed). A fixed lag keeps results independent of thread timing, and a lag
+// of 2 lets the frontend track frame k while the backend estimates frame k - 1.
+class DepthHintChannel {
+ public:
+  static constexpr int kLag = 2;
+  DepthHintChannel();
+  ~DepthHintChannel();
+  // Backend side, once per frame in order.
+  void push(double depth_m);
+  // Frontend side, once per frame in order: the hint for the frontend's n-th frame (0 for the first
+  // kLag frames). Waits for the backend; returns false when the context aborts first.
+  bool pop(std::int64_t n, const StageContext& context, double& depth_m);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class FrontendStage final : public Stage {
+ public:
+  // hints: non-null when the config's stereo guess uses the backend's depth.
+  FrontendStage(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities,
+                DepthHintChannel* hints, bool keep_left_traces);
+  std::string_view name() const override { return "frontend"; }
+  bool canSkipInput() const override { return true; }
+  int relativeCost() const override { return 4; }
+  void start(const StageContext& context) override { context_ = &context; }
+  void process(FrameSlot& slot, Emitter& out) override;
+
+ private:
+  KltFrontend frontend_;
+  DepthHintChannel* hints_;
+  bool keep_left_traces_;
+  const StageContext* context_ = nullptr;
+  std::int64_t frames_ = 0;
+  std::int64_t last_index_ = -1;
+};
+
+class BackendStage final : public Stage {
+ public:
+  BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints);
+  std::string_view name() const override { return "backend"; }
+  int relativeCost() const override { return 4; }
+  void process(FrameSlot& slot, Emitter& out) override;
+
+ private:
+  VoEstimator estimator_;
+  DepthHintChannel* hints_;
+};
+
+}  // namespace voca::pipeline

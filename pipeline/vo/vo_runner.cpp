@@ -1,0 +1,509 @@
+#include "pipeline/vo/vo_runner.h"
+
+#include <fmt/core.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/encode/dataset_encoder.h"
+#include "drivers/encode/video_encoder.h"
+#include "drivers/source/dataset_source.h"
+#include "pipeline/sinks/overlay_sink.h"
+#include "pipeline/sinks/trajectory_sink.h"
+#include "pipeline/stages/decode_stage.h"
+#include "pipeline/stages/estimation_stages.h"
+#include "pipeline/stages/source_stage.h"
+#include "platform/filesystem/temp_dir.h"
+#include "platform/realtime/stop_signal.h"
+#include "voca/calib/calibration.h"
+#include "voca/core/error.h"
+
+namespace voca::pipeline {
+
+namespace {
+
+// Thrown out of the encoder's progress callback when a stop is requested during --encode.
+struct EncodeInterrupted {};
+
+std::optional<Trajectory> loadGroundTruth(const Dataset& dataset) {
+  if (!dataset.ground_truth) return std::nullopt;
+  if (dataset.layout == DatasetLayout::kKitti) {
+    return loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
+  }
+  return loadTrajectory(*dataset.ground_truth);
+}
+
+// Progress on stderr: a line every few frames, and one per frame that was not tracked.
+class ProgressSink final : public FrameSink {
+ public:
+  ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage)
+      : total_(total), estimate_(estimate), frontend_stage_(frontend_stage), backend_stage_(backend_stage) {}
+  void consume(const FrameSlot& slot) override {
+    ++frames_;
+    if (estimate_ && slot.pose.state != TrackingState::kTracking) {
+      fmt::print(stderr, "\nframe {}: {} ({})\n", slot.frame.frame_index, trackingStateName(slot.pose.state),
+                 failureReasonName(slot.pose.failure));
+    }
+    if (frames_ % 20 != 0 && frames_ != total_) return;
+    const auto ms = [&](int stage) {
+      const StageTiming& t = slot.timing[static_cast<std::size_t>(stage)];
+      return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
+    };
+    if (estimate_) {
+      fmt::print(stderr, "\rframe {}/{}: {} landmarks, {} keyframes in the window, {:.1f} + {:.1f} ms   ", frames_,
+                 total_, slot.pose.num_landmarks, slot.pose.num_keyframes, ms(frontend_stage_), ms(backend_stage_));
+    } else {
+      fmt::print(stderr, "\rtracked {}/{} frames   ", frames_, total_);
+    }
+    printed_ = true;
+  }
+  void finish() override {
+    if (printed_) fmt::print(stderr, "\n");
+  }
+
+ private:
+  std::int64_t total_;
+  bool estimate_;
+  int frontend_stage_, backend_stage_;
+  std::int64_t frames_ = 0;
+  bool printed_ = false;
+};
+
+}  // namespace
+
+bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
+                     const std::optional<std::filesystem::path>& calibration, bool progress,
+                     const std::function<bool()>& stop_requested) {
+  encode::DatasetEncodeOptions encode_options;
+  encode_options.settings.bitrate_bps = bitrate_bps;
+  encode_options.calibration = calibration;
+  encode::silenceCodecLogs();
+  try {
+    encode::encodeDataset(input, out, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
+      if (stop_requested && stop_requested()) throw EncodeInterrupted{};
+      if (progress && (frame % 50 == 0 || frame + 1 == n)) {
+        fmt::print(stderr, "\rencoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
+      }
+    });
+  } catch (const EncodeInterrupted&) {
+    if (progress) fmt::print(stderr, "\n");
+    return false;
+  }
+  if (progress) fmt::print(stderr, "\n");
+  return true;
+}
+
+VoRunResult runVisualOdometry(const VoRunOptions& options) {
+  VoRunResult result;
+  const Dataset raw = openDataset(options.input);
+  result.warnings = raw.warnings;
+  // KITTI's street scenes and 0.54 m baseline put the paper's 2 m stereo guess ~190 px off, so a
+  // KITTI folder without an explicit config gets the shipped KITTI setting.
+  const bool kitti_default = !options.config && raw.layout == DatasetLayout::kKitti;
+  result.config = options.config ? loadConfig(*options.config) : kitti_default ? builtinConfig("kitti") : VocaConfig{};
+  result.config_name = options.config  ? options.config->string()
+                       : kitti_default ? "kitti (built in)"
+                                       : "euroc (built in)";
+  if (options.mode) result.config.frontend.prior_mode = *options.mode;
+  const std::optional<std::filesystem::path> calibration = options.calibration ? options.calibration : raw.calibration;
+  if (!calibration) {
+    throw InputError(
+        fmt::format("{}: no calibration found beside the dataset; pass one with --calib", options.input.string()));
+  }
+  const StereoRig rig = loadCalibration(*calibration);
+  if (rig.cameras.size() < 2) throw InputError(fmt::format("{}: need a stereo calibration", calibration->string()));
+  const std::function<bool()> stop_requested = options.pipeline.stop_requested
+                                                   ? options.pipeline.stop_requested
+                                                   : std::function<bool()>(platform::stopRequested);
+
+  // Encoding first, the paper's way (two passes need the whole sequence), into a folder that is
+  // removed however the run ends.
+  std::optional<TempDir> temp;
+  Dataset dataset = raw;
+  if (options.encode_bitrate_bps > 0 && raw.layout != DatasetLayout::kVocaVideo) {
+    temp.emplace("voca-run");
+    if (!encodeForReplay(options.input, temp->path(), options.encode_bitrate_bps, options.calibration, options.progress,
+                         stop_requested)) {
+      result.stop_signal = platform::stopSignal();
+      result.description = fmt::format("{} (stopped while encoding)", options.input.string());
+      return result;
+    }
+    dataset = openDataset(temp->path());
+  }
+
+  ReplayOptions replay;
+  replay.max_frames = options.max_frames;
+  replay.strict = options.strict;
+  std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);
+  const SourceInfo& info = source->info();
+  result.description = temp ? fmt::format("{} encoded at {} kbit/s: {}", options.input.string(),
+                                          options.encode_bitrate_bps / 1000, info.description)
+                            : info.description;
+  result.width = info.width;
+  result.height = info.height;
+  for (int c = 0; c < 2; ++c) {
+    const CameraCalibration& camera = rig.cameras[static_cast<std::size_t>(c)];
+    if (info.width != camera.width || info.height != camera.height) {
+      throw InputError(fmt::format("{}: images are {}x{} but the calibration {} says {}x{} for camera {}",
+                                   options.input.string(), info.width, info.height, rig.source, camera.width,
+                                   camera.height, c));
+    }
+  }
+  result.has_motion = info.kind == SourceKind::kEncoded;
+
+  // The stages, in data-flow order; positions count the source as 0.
+  SourceStageOptions source_options;
+  source_options.realtime = options.realtime;
+  source_options.speed = options.speed;
+  SourceStageAdapter source_stage(*source, source_options);
+  std::vector<Stage*> chain;
+  std::unique_ptr<DecodeStage> decode_stage;
+  int decode_position = -1;
+  if (info.kind == SourceKind::kEncoded) {
+    DecodeStageOptions decode_options;
+    decode_options.decoder.backend = options.decoder;
+    decode_options.decoder.strict = options.strict;
+    decode_options.decoder.log_choice = false;
+    decode_options.names = {dataset.video_left.string(), dataset.video_right.string()};
+    decode_stage = std::make_unique<DecodeStage>(info.streams, decode_options);
+    result.decoder_description = decode_stage->description();
+    chain.push_back(decode_stage.get());
+    decode_position = static_cast<int>(chain.size());
+  }
+  const bool uses_depth = options.estimate && result.config.frontend.matching_guess == StereoGuess::kAverageDepth;
+  DepthHintChannel hints;
+  FrontendStage frontend(result.config.frontend, rig, {.max_points = options.max_points}, uses_depth ? &hints : nullptr,
+                         !options.overlay_file.empty());
+  chain.push_back(&frontend);
+  const int frontend_position = static_cast<int>(chain.size());
+  std::unique_ptr<BackendStage> backend;
+  int backend_position = -1;
+  if (options.estimate) {
+    backend = std::make_unique<BackendStage>(result.config.backend, rig, uses_depth ? &hints : nullptr);
+    chain.push_back(backend.get());
+    backend_position = static_cast<int>(chain.size());
+  }
+
+  const auto expected = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
+  // Live input has no known length: keep an hour of rows at 30 Hz in memory and count the rest.
+  const std::size_t capacity = expected > 0 ? expected : 30 * 3600;
+  std::vector<FrameSink*> sinks;
+  std::unique_ptr<TrajectorySink> trajectory;
+  if (options.estimate) {
+    trajectory = std::make_unique<TrajectorySink>(
+        options.trajectory_file.empty() ? std::nullopt : std::optional<std::filesystem::path>(options.trajectory_file),
+        options.trajectory_format, options.keep_trajectory ? capacity : 0);
+    sinks.push_back(trajectory.get());
+  }
+  StatisticsSink statistics(capacity, decode_position, frontend_position, backend_position);
+  sinks.push_back(&statistics);
+  std::unique_ptr<OverlaySink> overlay;
+  if (!options.overlay_file.empty()) {
+    encode::silenceCodecLogs();  // libavcodec prints x264's settings at info level otherwise
+    const int fps = info.nominal_rate_hz > 0.0 ? static_cast<int>(std::lround(info.nominal_rate_hz)) : 20;
+    overlay = std::make_unique<OverlaySink>(options.overlay_file, fps, info.width, info.height);
+    sinks.push_back(overlay.get());
+  }
+  std::unique_ptr<ProgressSink> progress;
+  if (options.progress) {
+    progress =
+        std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position);
+    sinks.push_back(progress.get());
+  }
+  SinkStage sink(sinks);
+  chain.push_back(&sink);
+
+  PipelineOptions pipeline_options = options.pipeline;
+  pipeline_options.live_policy = options.pipeline.live_policy || options.realtime || info.live;
+  pipeline_options.slot_shape = {info.width, info.height, options.max_points};
+  pipeline_options.stop_requested = stop_requested;
+  Pipeline pipeline(source_stage, chain, pipeline_options);
+  result.pipeline = pipeline.run();
+  if (result.pipeline.stopped) result.stop_signal = platform::stopSignal();
+
+  result.frames = statistics.frames();
+  result.frontend = statistics.frontend();
+  result.backend = statistics.backend();
+  result.rows = statistics.rows();
+  if (trajectory) result.trajectory = trajectory->trajectory();
+  for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
+  if (const auto* video = dynamic_cast<const VideoFolderSource*>(source.get())) {
+    for (const std::string& warning : video->warnings()) result.warnings.push_back(warning);
+  }
+
+  if (options.estimate && options.keep_trajectory && !result.trajectory.poses.empty()) {
+    std::optional<Trajectory> gt;
+    if (options.ground_truth) {
+      gt = loadTrajectory(*options.ground_truth);
+      result.ground_truth = options.ground_truth->string();
+    } else if ((gt = loadGroundTruth(dataset))) {
+      result.ground_truth = dataset.ground_truth->string();
+    }
+    if (gt) {
+      EvalOptions eval_options;
+      eval_options.expected_frames = static_cast<std::size_t>(info.expected_frames);
+      try {
+        result.eval = evaluateTrajectory(result.trajectory, *gt, eval_options);
+      } catch (const InputError& e) {
+        result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", result.ground_truth, e.what()));
+        result.ground_truth.clear();
+      }
+    }
+  }
+  if (!options.statistics_file.empty()) writeStatisticsJson(result, options.statistics_file);
+  return result;
+}
+
+namespace {
+
+double ms(std::int64_t ns) { return static_cast<double>(ns) * 1e-6; }
+
+const StageReport* findStage(const RunReport& report, std::string_view name) {
+  for (const StageReport& s : report.stages) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+double pct(std::int64_t a, std::int64_t b) {
+  return b > 0 ? 100.0 * static_cast<double>(a) / static_cast<double>(b) : 0.0;
+}
+
+}  // namespace
+
+void printRunSummary(const VoRunResult& r, std::FILE* out) {
+  fmt::print(out, "input: {}\n", r.description);
+  fmt::print(out, "mode: {}{}\n", priorModeName(r.config.frontend.prior_mode),
+             r.has_motion ? "" : " (raw images: no motion vectors)");
+  fmt::print(out, "frames: {}, keyframes: {}, resets: {}, lost: {}\n", r.frames, r.backend.keyframes, r.backend.resets,
+             r.backend.lost);
+  const StageReport* frontend = findStage(r.pipeline, "frontend");
+  const StageReport* backend = findStage(r.pipeline, "backend");
+  if (frontend != nullptr && backend != nullptr) {
+    fmt::print(out,
+               "ms per frame: frontend median {:.2f} (mean {:.2f}, p99 {:.2f}), backend median {:.2f} (mean {:.2f}, "
+               "p99 {:.2f})\n",
+               ms(frontend->service.quantileNs(0.5)), frontend->service.meanNs() * 1e-6,
+               ms(frontend->service.quantileNs(0.99)), ms(backend->service.quantileNs(0.5)),
+               backend->service.meanNs() * 1e-6, ms(backend->service.quantileNs(0.99)));
+  }
+  fmt::print(out, "pipeline: {} thread{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
+             r.pipeline.threads == 1 ? "" : "s",
+             r.pipeline.wall_s > 0.0 ? static_cast<double>(r.pipeline.completed) / r.pipeline.wall_s : 0.0,
+             r.pipeline.wall_s);
+  if (r.pipeline.dropped > 0 || r.pipeline.damaged > 0) {
+    fmt::print(out, "skipped frames: {} dropped (live policy), {} damaged:", r.pipeline.dropped, r.pipeline.damaged);
+    int listed = 0;
+    for (const ReleasedFrame& f : r.pipeline.released) {
+      if (f.reason != ReleaseReason::kDropped && f.reason != ReleaseReason::kDamaged) continue;
+      if (listed++ == 20) {
+        fmt::print(out, " ...");
+        break;
+      }
+      fmt::print(out, " {}{}", f.frame_index, f.reason == ReleaseReason::kDamaged ? "(damaged)" : "");
+    }
+    fmt::print(out, "\n");
+  }
+  if (r.eval) {
+    fmt::print(out, "ground truth: {} ({} poses associated)\n", r.ground_truth, r.eval->ate.stats.count);
+    fmt::print(out, "ATE: {:.4f} m RMSE{}\n", r.eval->ate.stats.rmse, r.eval->ate_divergent ? " (divergent)" : "");
+    if (r.eval->rte) {
+      fmt::print(out, "RTE (6 frames): {:.4f} m RMSE{}\n", r.eval->rte->stats.rmse,
+                 r.eval->rte_divergent ? " (divergent)" : "");
+    }
+  } else {
+    fmt::print(out, "no ground truth with the dataset: ATE/RTE not computed\n");
+  }
+}
+
+void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::FILE* out) {
+  const FrontendTotals& t = r.frontend;
+  const double frames = static_cast<double>(std::max<std::int64_t>(r.frames, 1));
+  fmt::print(out, "input: {}\n", r.description);
+  fmt::print(out, "mode: {}{}, pattern {}, levels {}, grid {} px\n", priorModeName(config.prior_mode),
+             r.has_motion ? "" : " (raw images: no motion vectors, priors inactive)", config.pattern,
+             config.pyramid_levels, config.grid_size_px);
+  fmt::print(out, "tracks per frame: left mean {:.1f} (min {}, max {}), right mean {:.1f}\n",
+             static_cast<double>(t.left_points) / frames, t.min_left, t.max_left,
+             static_cast<double>(t.right_points) / frames);
+  fmt::print(out, "survival frame to frame: {:.1f} % of {} temporal tracks kept (both cameras)\n",
+             pct(t.kept, t.previous), t.previous);
+  fmt::print(out, "with motion vector: {:.1f} %; tracked from previous position: {}, from MV prior: {}\n",
+             pct(t.with_vector, t.previous), t.tracked_plain, t.tracked_prior);
+  fmt::print(out,
+             "rescued by the prior: {} ({:.2f} per frame); consensus rejections: {} ({:.2f} per frame); bridged "
+             "I-frames: {}\n",
+             t.rescued, static_cast<double>(t.rescued) / frames, t.consensus, static_cast<double>(t.consensus) / frames,
+             t.bridged_frames);
+  fmt::print(out, "new points: {:.1f} per frame, {:.1f} % matched in the right image; epipolar rejections: {}\n",
+             static_cast<double>(t.detected) / frames, pct(t.stereo_matched, t.detected), t.epipolar);
+  if (config.detection_nonoverlap) {
+    fmt::print(out, "right-only points (detection_nonoverlap): {:.1f} new per frame\n",
+               static_cast<double>(t.detected_right_only) / frames);
+  }
+  if (t.guess_prior.count() > 0) {
+    fmt::print(out,
+               "guess to converged distance (px, {} kept tracks with a vector): previous position median {:.3f} p90 "
+               "{:.3f}; MV prior median {:.3f} p90 {:.3f}\n",
+               t.guess_prior.count(), t.guess_plain.quantile(0.5), t.guess_plain.quantile(0.9),
+               t.guess_prior.quantile(0.5), t.guess_prior.quantile(0.9));
+  }
+  if (const StageReport* frontend = findStage(r.pipeline, "frontend")) {
+    fmt::print(out,
+               "time per stereo frame: wall median {:.2f} ms, p99 {:.2f} ms; thread CPU median {:.2f} ms, p99 {:.2f} "
+               "ms\n",
+               ms(frontend->service.quantileNs(0.5)), ms(frontend->service.quantileNs(0.99)),
+               ms(frontend->cpu.quantileNs(0.5)), ms(frontend->cpu.quantileNs(0.99)));
+  }
+}
+
+namespace {
+
+nlohmann::json histogramJson(const LatencyHistogram& h) {
+  return {{"count", h.count()},
+          {"p50_ms", ms(h.quantileNs(0.5))},
+          {"p90_ms", ms(h.quantileNs(0.9))},
+          {"p99_ms", ms(h.quantileNs(0.99))},
+          {"max_ms", ms(h.maxNs())},
+          {"mean_ms", h.meanNs() * 1e-6}};
+}
+
+nlohmann::json distanceJson(const DistanceHistogram& h) {
+  // Sparse: [bin start px, count] for the non-empty bins, the overflow bin as its start (16 px).
+  nlohmann::json bins = nlohmann::json::array();
+  for (int b = 0; b <= DistanceHistogram::kBins; ++b) {
+    const std::int64_t count = h.bins()[static_cast<std::size_t>(b)];
+    if (count > 0) bins.push_back({b * DistanceHistogram::kBinPx, count});
+  }
+  return {{"count", h.count()},
+          {"median_px", h.quantile(0.5)},
+          {"p90_px", h.quantile(0.9)},
+          {"bin_px", DistanceHistogram::kBinPx},
+          {"bins", bins}};
+}
+
+}  // namespace
+
+void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file) {
+  nlohmann::json j;
+  j["input"] = r.description;
+  j["config"] = r.config_name;
+  j["mode"] = std::string(priorModeName(r.config.frontend.prior_mode));
+  j["has_motion"] = r.has_motion;
+  j["decoder"] = r.decoder_description;
+  j["image_size"] = {r.width, r.height};
+  j["frames"] = r.frames;
+  j["stopped_by_signal"] = r.stop_signal;
+  const RunReport& p = r.pipeline;
+  if (p.error) {
+    j["error"] = {{"stage", p.error->stage}, {"frame", p.error->frame_index}, {"message", p.error->message}};
+  }
+  j["backend"] = {{"keyframes", r.backend.keyframes}, {"resets", r.backend.resets}, {"lost", r.backend.lost}};
+  const FrontendTotals& t = r.frontend;
+  j["frontend"] = {{"temporal_tracks", t.previous},
+                   {"kept", t.kept},
+                   {"rescued_by_prior", t.rescued},
+                   {"consensus_rejections", t.consensus},
+                   {"tracked_from_previous", t.tracked_plain},
+                   {"tracked_from_prior", t.tracked_prior},
+                   {"with_vector", t.with_vector},
+                   {"detected", t.detected},
+                   {"detected_right_only", t.detected_right_only},
+                   {"stereo_matched", t.stereo_matched},
+                   {"epipolar_rejections", t.epipolar},
+                   {"bridged_frames", t.bridged_frames},
+                   {"left_points", t.left_points},
+                   {"right_points", t.right_points},
+                   {"guess_distance_previous", distanceJson(t.guess_plain)},
+                   {"guess_distance_prior", distanceJson(t.guess_prior)}};
+  nlohmann::json stages = nlohmann::json::array();
+  for (const StageReport& s : p.stages) {
+    stages.push_back({{"name", s.name},
+                      {"thread", s.thread},
+                      {"core", s.core},
+                      {"service", histogramJson(s.service)},
+                      {"wait", histogramJson(s.wait)},
+                      {"cpu", histogramJson(s.cpu)},
+                      {"queue_high_water", s.queue_high_water},
+                      {"dropped", s.dropped},
+                      {"damaged", s.damaged}});
+  }
+  nlohmann::json released = nlohmann::json::array();
+  for (const ReleasedFrame& f : p.released) {
+    if (f.reason == ReleaseReason::kDropped || f.reason == ReleaseReason::kDamaged) {
+      released.push_back({{"frame", f.frame_index},
+                          {"stage", p.stages[static_cast<std::size_t>(f.stage)].name},
+                          {"reason", f.reason == ReleaseReason::kDropped ? "dropped" : "damaged"}});
+    }
+  }
+  j["pipeline"] = {{"threads", p.threads},
+                   {"wall_s", p.wall_s},
+                   {"frames_per_s", p.wall_s > 0 ? static_cast<double>(p.completed) / p.wall_s : 0.0},
+                   {"produced", p.produced},
+                   {"completed", p.completed},
+                   {"dropped", p.dropped},
+                   {"damaged", p.damaged},
+                   {"skipped_frames", released},
+                   {"end_to_end", histogramJson(p.end_to_end)},
+                   {"stages", stages}};
+  if (r.eval) {
+    j["eval"] = evalReportToJson(*r.eval, EvalOptions{});
+    j["ground_truth"] = r.ground_truth;
+  }
+  nlohmann::json rows = nlohmann::json::array();
+  for (const FrameRecord& f : r.rows) {
+    rows.push_back({f.frame_index,
+                    f.t_ns,
+                    f.missing_before,
+                    std::string(1, f.picture_type),
+                    f.bridged,
+                    f.left,
+                    f.right,
+                    f.kept,
+                    f.lost,
+                    f.rescued,
+                    f.consensus_rejections,
+                    f.detected,
+                    std::string(trackingStateName(static_cast<TrackingState>(f.state))),
+                    f.keyframe,
+                    f.landmarks,
+                    f.inliers,
+                    f.decode_ms,
+                    f.frontend_ms,
+                    f.backend_ms,
+                    f.frontend_cpu_ms,
+                    f.backend_cpu_ms});
+  }
+  j["frame_columns"] = {"frame",
+                        "t_ns",
+                        "missing_before",
+                        "picture",
+                        "bridged",
+                        "left",
+                        "right",
+                        "kept",
+                        "lost",
+                        "rescued",
+                        "consensus_rejections",
+                        "detected",
+                        "state",
+                        "keyframe",
+                        "landmarks",
+                        "inliers",
+                        "decode_ms",
+                        "frontend_ms",
+                        "backend_ms",
+                        "frontend_cpu_ms",
+                        "backend_cpu_ms"};
+  j["frame_rows"] = rows;
+  j["frame_rows_truncated"] = r.frames > static_cast<std::int64_t>(r.rows.size());
+  std::ofstream file_out(file);
+  file_out << j.dump(1) << "\n";
+  if (!file_out) throw InputError(fmt::format("cannot write statistics file {}", file.string()));
+}
+
+}  // namespace voca::pipeline

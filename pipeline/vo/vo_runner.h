@@ -1,0 +1,93 @@
+#pragma once
+// The one runner behind `voca run`, `voca track`, `voca demo` and `voca bench`: opens an input
+// (a raw dataset, optionally encoded first the way the paper did, or a VOCA video folder), builds
+// the staged pipeline (read -> [decode] -> frontend -> [backend] -> write), runs it and returns
+// everything a caller prints or checks: trajectory, statistics, per-stage latency, drops, damaged
+// frames, and ATE/RTE when the dataset has ground truth. Outputs stream while the run goes: a stopped
+// or failed run leaves every pose estimated so far in the trajectory file.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivers/decode/backend.h"
+#include "pipeline/runtime/runner.h"
+#include "pipeline/sinks/statistics_sink.h"
+#include "voca/config/config.h"
+#include "voca/eval/evaluate.h"
+#include "voca/trajectory/trajectory.h"
+
+namespace voca::pipeline {
+
+struct VoRunOptions {
+  // Input.
+  std::filesystem::path input;
+  std::optional<std::filesystem::path> calibration;
+  std::optional<std::filesystem::path> config;        // file or shipped name; default: euroc (kitti for KITTI folders)
+  std::optional<std::filesystem::path> ground_truth;  // overrides the dataset's own
+  std::optional<PriorMode> mode;                      // overrides the config's frontend.prior_mode
+  std::int64_t encode_bitrate_bps = 0;  // raw datasets: encode (two-pass x264, the paper's way) to a temp folder first
+  int max_frames = 0;                   // 0 = all
+  int max_points = 1000;                // frontend capacity per camera
+  bool estimate = true;                 // false: frontend only (`voca track`)
+  decode::DecoderBackend decoder = decode::DecoderBackend::kAuto;
+
+  // Outputs (empty paths: not written).
+  std::filesystem::path trajectory_file;
+  TrajectoryFormat trajectory_format = TrajectoryFormat::kTum;
+  std::filesystem::path statistics_file;  // JSON: totals, per-stage latency, drops, per-frame rows
+  std::filesystem::path overlay_file;     // .mp4 of the left camera with the tracks drawn
+  bool keep_trajectory = true;            // in memory too (for evaluation and callers)
+
+  // How to run.
+  PipelineOptions pipeline;  // threads, pins, scheduling, memory locking, trace file, stop request
+  bool realtime = false;     // pace the source at the recording's timestamps; drop instead of waiting
+  double speed = 1.0;        // realtime playback speed
+  bool strict = false;       // stop at the first damaged frame instead of skipping it
+  bool progress = true;      // progress lines on stderr
+};
+
+struct VoRunResult {
+  std::string description;          // the input, one line
+  std::string decoder_description;  // "decoder: software", empty for raw images
+  VocaConfig config;                // as used, after --mode
+  std::string config_name;          // the file or shipped name the config came from
+  bool has_motion = false;          // decoded video: motion vectors available
+  int width = 0, height = 0;
+  Trajectory trajectory;  // causal, body frame of the calibration (when keep_trajectory)
+  std::int64_t frames = 0;
+  FrontendTotals frontend;
+  BackendTotals backend;
+  std::vector<FrameRecord> rows;
+  RunReport pipeline;              // per-stage latency, queues, drops, damaged frames, error
+  std::optional<EvalReport> eval;  // when there is ground truth
+  std::string ground_truth;
+  int stop_signal = 0;  // the signal that stopped the run early (0: none)
+  std::vector<std::string> warnings;
+};
+
+// Encodes a raw dataset the way the paper did (two-pass libx264 at bitrate_bps, its x264 options) into
+// a VOCA video folder at out, printing progress on stderr when asked. Returns false, leaving out
+// incomplete, when stop_requested() turns true first.
+bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
+                     const std::optional<std::filesystem::path>& calibration, bool progress,
+                     const std::function<bool()>& stop_requested);
+
+// Throws InputError for bad input found before the run starts (missing dataset, calibration or
+// config; images that do not match the calibration). A stage failing during the run does not throw:
+// the result carries it in pipeline.error, with everything estimated up to then.
+VoRunResult runVisualOdometry(const VoRunOptions& options);
+
+// The end-of-run summary `voca run` prints (frames, keyframes, resets, ms per frame, ATE/RTE).
+void printRunSummary(const VoRunResult& result, std::FILE* out);
+// The frontend summary `voca track` prints (tracks, survival, rescues, guess distances, time).
+void printTrackSummary(const VoRunResult& result, const FrontendConfig& config, std::FILE* out);
+
+// Writes the statistics JSON (also done by runVisualOdometry when statistics_file is set).
+void writeStatisticsJson(const VoRunResult& result, const std::filesystem::path& file);
+
+}  // namespace voca::pipeline

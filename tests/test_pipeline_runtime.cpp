@@ -1,0 +1,313 @@
+// The staged runner on its own, with stand-in stages: every thread layout keeps every frame and its
+// order offline; the live policy's drops are exactly the frames missing downstream; a throwing stage
+// stops the run with its name and frame, finishes what was past it and never hangs; a stop request
+// drains; latency histograms and the Chrome trace agree.
+
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <chrono>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "pipeline/runtime/chrome_trace.h"
+#include "pipeline/runtime/latency_histogram.h"
+#include "pipeline/runtime/runner.h"
+#include "tests/test_support.h"
+
+using namespace voca;
+using namespace voca::pipeline;
+
+namespace {
+
+// Frames 0..count-1, as fast as the pipeline takes them.
+class CountingSource final : public SourceStage {
+ public:
+  explicit CountingSource(std::int64_t count) : count_(count) {}
+  std::string_view name() const override { return "read"; }
+  bool produce(FrameSlot& slot) override {
+    if (interrupted_ || next_ >= count_) return false;
+    slot.frame.frame_index = next_++;
+    slot.frame.t_ns = slot.frame.frame_index * 1000;
+    return true;
+  }
+  void interrupt() override { interrupted_ = true; }
+  std::int64_t produced() const { return next_; }
+
+ private:
+  std::int64_t count_;
+  std::int64_t next_ = 0;
+  std::atomic<bool> interrupted_{false};
+};
+
+// Spins for a random time up to max_us per frame (deterministic per seed), optionally throws at one
+// frame, optionally may be skipped by the live policy.
+class DelayStage final : public Stage {
+ public:
+  DelayStage(std::string name, int max_us, unsigned seed, bool can_skip = false, std::int64_t throw_at = -1)
+      : name_(std::move(name)), max_us_(max_us), random_(seed), can_skip_(can_skip), throw_at_(throw_at) {}
+  std::string_view name() const override { return name_; }
+  bool canSkipInput() const override { return can_skip_; }
+  void process(FrameSlot& slot, Emitter& out) override {
+    if (slot.frameIndex() == throw_at_) throw std::runtime_error("planted failure");
+    const int us = max_us_ > 0 ? static_cast<int>(random_() % static_cast<unsigned>(max_us_ + 1)) : 0;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(us);
+    while (std::chrono::steady_clock::now() < until) {
+    }
+    ++seen_;
+    out.forward(slot);
+  }
+  std::int64_t seen() const { return seen_; }
+
+ private:
+  std::string name_;
+  int max_us_;
+  std::minstd_rand random_;
+  bool can_skip_;
+  std::int64_t throw_at_;
+  std::int64_t seen_ = 0;
+};
+
+// Records the frame order it sees.
+class RecordingSink final : public Stage {
+ public:
+  std::string_view name() const override { return "write"; }
+  void process(FrameSlot& slot, Emitter& out) override {
+    indices.push_back(slot.frameIndex());
+    out.forward(slot);
+  }
+  void finish(Emitter& /*out*/) override { finished = true; }
+  std::vector<std::int64_t> indices;
+  bool finished = false;
+};
+
+bool strictlyIncreasing(const std::vector<std::int64_t>& v) {
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    if (v[i] <= v[i - 1]) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("pipeline: offline policy keeps all 20000 frames in order, in every thread layout") {
+  constexpr std::int64_t kFrames = 20000;
+  for (const int threads : {1, 2, 0}) {
+    CountingSource source(kFrames);
+    DelayStage decode("decode", 20, 1), frontend("frontend", 30, 2, true), backend("backend", 30, 3);
+    RecordingSink sink;
+    PipelineOptions options;
+    options.threads = threads;
+    Pipeline pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+    const RunReport report = pipeline.run();
+    INFO("threads option " << threads << " -> " << report.threads << " threads");
+    CHECK(report.threads == (threads == 0 ? 5 : threads));
+    CHECK_FALSE(report.error);
+    CHECK(report.produced == kFrames);
+    CHECK(report.completed == kFrames);
+    CHECK(report.dropped == 0);
+    REQUIRE(sink.indices.size() == static_cast<std::size_t>(kFrames));
+    CHECK(strictlyIncreasing(sink.indices));
+    CHECK(sink.finished);
+    CHECK(report.end_to_end.count() == kFrames);
+    for (const StageReport& s : report.stages) CHECK(s.service.count() == kFrames);
+  }
+}
+
+TEST_CASE("pipeline: live policy drops only in front of a skippable stage, and every drop is counted") {
+  constexpr std::int64_t kFrames = 20000;
+  // A slow frontend behind a fast source: most frames must be dropped, the rest arrive in order.
+  CountingSource source(kFrames);
+  DelayStage decode("decode", 0, 1), frontend("frontend", 60, 2, true), backend("backend", 10, 3);
+  RecordingSink sink;
+  PipelineOptions options;
+  options.threads = 0;
+  options.live_policy = true;
+  Pipeline pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+  const RunReport report = pipeline.run();
+  CHECK_FALSE(report.error);
+  CHECK(report.produced == kFrames);
+  CHECK(decode.seen() == kFrames);  // a decoder sees every frame
+  CHECK(report.dropped > 0);
+  CHECK(report.dropped == kFrames - static_cast<std::int64_t>(sink.indices.size()));
+  CHECK(report.completed + report.dropped == kFrames);
+  CHECK(strictlyIncreasing(sink.indices));
+  // Drops are recorded at the frontend, each with the index of a frame the sink never saw.
+  CHECK(report.stages[2].dropped == report.dropped);
+  std::vector<bool> seen(kFrames, false);
+  for (const std::int64_t i : sink.indices) seen[static_cast<std::size_t>(i)] = true;
+  std::int64_t missing = 0;
+  for (const bool s : seen) missing += s ? 0 : 1;
+  CHECK(missing == report.dropped);
+  REQUIRE(report.released.size() == static_cast<std::size_t>(report.dropped));
+  for (const ReleasedFrame& f : report.released) {
+    CHECK(f.reason == ReleaseReason::kDropped);
+    CHECK_FALSE(seen[static_cast<std::size_t>(f.frame_index)]);
+  }
+}
+
+TEST_CASE("pipeline: a throwing stage stops the run with its name and frame, finishes earlier frames, never hangs") {
+  for (const int threads : {1, 0}) {
+    CountingSource source(100000);
+    DelayStage decode("decode", 5, 1), frontend("frontend", 5, 2, false, 137), backend("backend", 5, 3);
+    RecordingSink sink;
+    PipelineOptions options;
+    options.threads = threads;
+    Pipeline pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+    const RunReport report = pipeline.run();
+    INFO("threads " << threads);
+    REQUIRE(report.error);
+    CHECK(report.error->stage == "frontend");
+    CHECK(report.error->frame_index == 137);
+    CHECK(report.error->message == "planted failure");
+    // Every frame before the failure passed every stage; none after it reached the sink.
+    REQUIRE(sink.indices.size() == 137);
+    CHECK(sink.indices.back() == 136);
+    CHECK(strictlyIncreasing(sink.indices));
+    CHECK(sink.finished);
+    CHECK(source.produced() < 100000);
+  }
+}
+
+TEST_CASE("pipeline: a stop request drains the queues and reports it") {
+  CountingSource source(1000000);
+  DelayStage decode("decode", 10, 1), frontend("frontend", 10, 2, true), backend("backend", 10, 3);
+  RecordingSink sink;
+  PipelineOptions options;
+  std::atomic<int> polls{0};
+  options.stop_requested = [&] { return polls.fetch_add(1) > 200; };
+  Pipeline pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+  const RunReport report = pipeline.run();
+  CHECK(report.stopped);
+  CHECK_FALSE(report.error);
+  CHECK(report.produced < 1000000);
+  // Everything the source produced went through (offline policy: no drops on the way out).
+  CHECK(report.completed == report.produced);
+  CHECK(static_cast<std::int64_t>(sink.indices.size()) == report.produced);
+}
+
+TEST_CASE("pipeline: thread layouts and pins are checked") {
+  CountingSource source(10);
+  DelayStage decode("decode", 0, 1), frontend("frontend", 0, 2), backend("backend", 0, 3);
+  RecordingSink sink;
+  PipelineOptions options;
+  options.threads = 2;
+  const auto layout = Pipeline(source, {&decode, &frontend, &backend, &sink}, options).threadOfStage();
+  // Equal costs over 5 stages in 2 threads: contiguous runs, the source's first.
+  REQUIRE(layout.size() == 5);
+  CHECK(layout.front() == 0);
+  CHECK(layout.back() == 1);
+  CHECK(std::is_sorted(layout.begin(), layout.end()));
+
+  options.pins = {{"tracker", 0}};
+  test::expectError(test::inputErrorOf([&] {
+                      Pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+                    }),
+                    "no stage named \"tracker\"");
+  options.threads = 1;
+  options.pins = {{"decode", 0}, {"backend", 1}};
+  test::expectError(test::inputErrorOf([&] {
+                      Pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+                    }),
+                    "shares a thread");
+  CHECK(parseStagePins("decode:0,frontend:0,backend:1") ==
+        std::vector<std::pair<std::string, int>>{{"decode", 0}, {"frontend", 0}, {"backend", 1}});
+  test::expectError(test::inputErrorOf([] { parseStagePins("decode=0"); }), "stage:core");
+  test::expectError(test::inputErrorOf([] { parseStagePins("decode:-1"); }), "stage:core");
+  test::expectError(test::inputErrorOf([] { parseStagePins(":3"); }), "stage:core");
+}
+
+TEST_CASE("pipeline: a pin the OS refuses is one warning and the run goes on") {
+  CountingSource source(50);
+  DelayStage frontend("frontend", 0, 2);
+  RecordingSink sink;
+  PipelineOptions options;
+  options.pins = {{"frontend", 4095}};  // no machine this runs on has that core
+  Pipeline pipeline(source, {&frontend, &sink}, options);
+  const RunReport report = pipeline.run();
+  CHECK(report.completed == 50);
+  REQUIRE(report.warnings.size() == 1);
+  CHECK(report.warnings[0].find("core 4095") != std::string::npos);
+}
+
+TEST_CASE("latency histogram: exact below 128 ns, within 0.8 % above, exact extremes") {
+  LatencyHistogram h;
+  CHECK(h.quantileNs(0.5) == 0);
+  for (std::int64_t v = 1; v <= 100; ++v) h.record(v);
+  CHECK(h.quantileNs(0.0) == 1);
+  CHECK(h.quantileNs(1.0) == 100);
+  CHECK(h.quantileNs(0.5) == 51);  // rank round(0.5 * 99) = 50 -> the 51st value, exact below 128 ns
+  LatencyHistogram big;
+  std::minstd_rand random(7);
+  std::vector<std::int64_t> values;
+  for (int i = 0; i < 10001; ++i) {
+    values.push_back(1000 + static_cast<std::int64_t>(random() % 50'000'000));
+    big.record(values.back());
+  }
+  std::sort(values.begin(), values.end());
+  for (const double q : {0.1, 0.5, 0.9, 0.99}) {
+    const double exact = static_cast<double>(values[static_cast<std::size_t>(std::llround(q * 10000))]);
+    CHECK(std::abs(static_cast<double>(big.quantileNs(q)) - exact) <= exact / 128.0 + 1.0);
+  }
+  CHECK(big.maxNs() == values.back());
+  LatencyHistogram merged;
+  merged.merge(h);
+  merged.merge(big);
+  CHECK(merged.count() == 10101);
+  CHECK(merged.maxNs() == values.back());
+}
+
+TEST_CASE("pipeline: the Chrome trace reads back to the run's own latency statistics") {
+  test::ScratchDir dir("pipeline-trace");
+  CountingSource source(300);
+  DelayStage decode("decode", 30, 1), frontend("frontend", 50, 2, true), backend("backend", 40, 3);
+  RecordingSink sink;
+  PipelineOptions options;
+  options.trace_path = dir / "trace.json";
+  Pipeline pipeline(source, {&decode, &frontend, &backend, &sink}, options);
+  const RunReport report = pipeline.run();
+  REQUIRE(report.completed == 300);
+  const RunReport read = readTraceReport(dir / "trace.json");
+  CHECK(read.completed == 300);
+  CHECK(read.threads == report.threads);
+  REQUIRE(read.stages.size() == report.stages.size());
+  for (std::size_t k = 0; k < read.stages.size(); ++k) {
+    INFO("stage " << report.stages[k].name);
+    CHECK(read.stages[k].name == report.stages[k].name);
+    CHECK(read.stages[k].queue_high_water == report.stages[k].queue_high_water);
+    for (const double q : {0.5, 0.9, 0.99, 1.0}) {
+      CHECK(read.stages[k].service.quantileNs(q) == report.stages[k].service.quantileNs(q));
+      CHECK(read.stages[k].wait.quantileNs(q) == report.stages[k].wait.quantileNs(q));
+      CHECK(read.stages[k].cpu.quantileNs(q) == report.stages[k].cpu.quantileNs(q));
+    }
+  }
+  CHECK(read.end_to_end.quantileNs(0.99) == report.end_to_end.quantileNs(0.99));
+  // The printed tables are the same text.
+  const auto printed = [](const RunReport& r) {
+    char* buffer = nullptr;
+    std::size_t size = 0;
+    std::FILE* out = open_memstream(&buffer, &size);
+    printLatencyReport(r, out);
+    std::fclose(out);
+    std::string text(buffer, size);
+    std::free(buffer);
+    return text;
+  };
+  CHECK(printed(read) == printed(report));
+
+  // A trace cut off mid-run (the process was killed) still reads.
+  std::string text;
+  {
+    std::ifstream in(dir / "trace.json");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::size_t summary = text.find("\"cat\":\"summary\"");
+  REQUIRE(summary != std::string::npos);
+  const std::size_t cut = text.rfind(",\n{", summary);
+  test::writeText(dir / "cut.json", text.substr(0, cut));
+  CHECK(readTraceReport(dir / "cut.json").completed == 300);
+  test::writeText(dir / "bad.json", "{\"not\": \"a trace\"}");
+  test::expectError(test::inputErrorOf([&] { readTraceReport(dir / "bad.json"); }), "not a Chrome trace");
+}

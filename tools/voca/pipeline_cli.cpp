@@ -1,0 +1,98 @@
+#include "tools/voca/pipeline_cli.h"
+
+#include <fmt/core.h>
+
+#include <charconv>
+
+#include "pipeline/runtime/chrome_trace.h"
+#include "platform/realtime/stop_signal.h"
+#include "voca/core/error.h"
+
+namespace voca::cli {
+
+void addPipelineOptions(CLI::App& app, PipelineCli& cli) {
+  app.add_option("--threads", cli.threads,
+                 "Threads: auto (one per stage), 1 (every stage in one thread), or N (stages grouped in order)")
+      ->capture_default_str();
+  app.add_option("--pin", cli.pin,
+                 "Stage-to-core map, e.g. decode:0,frontend:0,backend:1 (stages: read, decode, "
+                 "frontend, backend, write)");
+  app.add_option("--sched", cli.scheduling, "Scheduling class of the pipeline threads: other, fifo or rr")
+      ->capture_default_str();
+  app.add_option("--priority", cli.priority, "Real-time priority for --sched fifo|rr (1-99)")->capture_default_str();
+  app.add_flag("--mlock", cli.lock_memory, "Lock the process's memory in RAM (mlockall)");
+  app.add_flag("--realtime", cli.realtime,
+               "Replay at the recording's own rate, as a camera delivers frames; a stage that falls behind drops the "
+               "oldest waiting frame (counted) instead of making the source wait");
+  app.add_option("--speed", cli.speed, "With --realtime: playback speed factor")->capture_default_str();
+  app.add_flag("--strict", cli.strict, "Stop at the first damaged frame instead of skipping it");
+  app.add_option("--decoder", cli.decoder, "Decoder: auto, software, vaapi or v4l2m2m")->capture_default_str();
+  app.add_flag("--profile", cli.profile, "Print p50/p90/p99/max latency per stage and end to end, queues and drops");
+  app.add_option("--trace", cli.trace, "Write a Chrome trace-event JSON of every frame's stages (open in Perfetto)");
+  app.add_option("--stats", cli.stats,
+                 "Write statistics JSON: totals, per-stage latency, skipped frames, one row per frame");
+}
+
+void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& options) {
+  if (cli.threads == "auto") {
+    options.pipeline.threads = 0;
+  } else {
+    int threads = 0;
+    const auto [end, ec] = std::from_chars(cli.threads.data(), cli.threads.data() + cli.threads.size(), threads);
+    if (ec != std::errc{} || end != cli.threads.data() + cli.threads.size() || threads < 1) {
+      throw InputError(fmt::format("--threads: expected auto or a positive count, got \"{}\"", cli.threads));
+    }
+    options.pipeline.threads = threads;
+  }
+  if (!cli.pin.empty()) options.pipeline.pins = pipeline::parseStagePins(cli.pin);
+  const auto scheduling = platform::parseSchedulingPolicy(cli.scheduling);
+  if (!scheduling) throw InputError(fmt::format("--sched: expected other, fifo or rr, got \"{}\"", cli.scheduling));
+  options.pipeline.scheduling = *scheduling;
+  if (*scheduling != platform::SchedulingPolicy::kOther && (cli.priority < 1 || cli.priority > 99)) {
+    throw InputError(fmt::format("--priority: expected 1 to 99, got {}", cli.priority));
+  }
+  options.pipeline.priority = cli.priority;
+  options.pipeline.lock_memory = cli.lock_memory;
+  if (cli.speed <= 0.0) throw InputError(fmt::format("--speed: expected a positive factor, got {}", cli.speed));
+  options.realtime = cli.realtime;
+  options.speed = cli.speed;
+  options.strict = cli.strict;
+  options.decoder = decode::parseBackend(cli.decoder);
+  options.pipeline.trace_path = cli.trace;
+  options.statistics_file = cli.stats;
+}
+
+std::string pipelineHelpFooter() {
+  return "Pipeline: read -> decode (video input) -> frontend -> backend -> write, each stage on its own thread by\n"
+         "default, connected by bounded lock-free queues; --threads 1 runs them all in one thread and writes a\n"
+         "byte-identical trajectory. --pin maps stages to cores (as taskset counts them); --sched fifo|rr with\n"
+         "--priority and --mlock need CAP_SYS_NICE / a memlock limit, and warn once and go on when refused.\n"
+         "Offline replay never drops a frame; --realtime paces the input at its timestamps and drops the\n"
+         "oldest waiting frame when the frontend falls behind (every drop is counted and listed).\n"
+         "A damaged frame is skipped and listed (--strict stops instead). Poses are written and flushed as\n"
+         "they are estimated.\n"
+         "Exit codes: 0 done; 1 bad input or a stage failed (what was estimated is written); 130 stopped by\n"
+         "SIGINT (Ctrl-C), 143 by SIGTERM, after writing everything estimated so far; a second signal exits at\n"
+         "once.";
+}
+
+int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
+  for (const std::string& warning : result.warnings) fmt::print(stderr, "warning: {}\n", warning);
+  if (cli.profile) pipeline::printLatencyReport(result.pipeline, stdout);
+  if (!cli.trace.empty()) fmt::print("trace: {} (open in https://ui.perfetto.dev)\n", cli.trace);
+  if (!cli.stats.empty()) fmt::print("statistics: {}\n", cli.stats);
+  if (result.pipeline.error) {
+    const pipeline::StageError& e = *result.pipeline.error;
+    fmt::print(stderr, "voca {}: error: {} stage failed{}: {}\n", command, e.stage,
+               e.frame_index >= 0 ? fmt::format(" at frame {}", e.frame_index) : std::string(), e.message);
+    return 1;
+  }
+  if (result.stop_signal != 0) {
+    fmt::print(stderr, "voca {}: stopped by signal {} after {} frames; outputs hold everything processed\n", command,
+               result.stop_signal, result.frames);
+    return platform::interruptedExitCode(result.stop_signal);
+  }
+  return 0;
+}
+
+}  // namespace voca::cli

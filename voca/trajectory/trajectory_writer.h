@@ -1,0 +1,40 @@
+#pragma once
+// Appends poses to a trajectory file one row at a time, each flushed as it is written, so a run that
+// is stopped or crashes leaves every pose estimated so far in a parseable file.
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+
+#include "voca/trajectory/trajectory.h"
+
+namespace voca {
+
+class TrajectoryWriter {
+ public:
+  // Creates (or truncates) the file and writes the format's header line (none for KITTI). Throws
+  // InputError naming the file when it cannot be created.
+  TrajectoryWriter(const std::filesystem::path& path, TrajectoryFormat format);
+  ~TrajectoryWriter();
+  TrajectoryWriter(const TrajectoryWriter&) = delete;
+  TrajectoryWriter& operator=(const TrajectoryWriter&) = delete;
+
+  // One row, with full precision (timestamps exact, numbers in their shortest round-trip form),
+  // handed to the OS before returning. Does not allocate. Throws InputError on a write error.
+  void append(const TimedPose& pose);
+  // Closes the file; throws InputError when the data could not be written. The destructor closes
+  // without throwing.
+  void close();
+
+  const std::filesystem::path& path() const { return path_; }
+  TrajectoryFormat format() const { return format_; }
+  std::int64_t rows() const { return rows_; }
+
+ private:
+  std::filesystem::path path_;
+  TrajectoryFormat format_;
+  std::FILE* file_ = nullptr;
+  std::int64_t rows_ = 0;
+};
+
+}  // namespace voca
