@@ -1,2 +1,12 @@
 # The staged runner with stand-in stages: ordering, drops, failures, stop requests, latency, trace.
 voca_add_test(test_pipeline_runtime SOURCES test_pipeline_runtime.cpp LIBS voca_pipeline_runtime TIMEOUT 120)
+# The VO through the pipeline on rendered, micro EuRoC and KITTI data: determinism across thread
+# layouts, damaged packets, failing sources, signals to a running `voca run`, live-rate replay.
+voca_add_test(test_pipeline_e2e SOURCES test_pipeline_e2e.cpp
+              LIBS voca_pipeline_vo voca_drivers_source voca_drivers_dataset voca_calib voca_trajectory
+              LABELS e2e TIMEOUT 900)
+add_dependencies(test_pipeline_e2e voca)
+# Interposes malloc (own executable): the pipeline allocates nothing per frame beyond what FFmpeg's
+# demuxer and decoder allocate, which the test counts exactly.
+voca_add_test(test_pipeline_alloc SOURCES test_pipeline_alloc.cpp
+              LIBS voca_pipeline_vo voca_drivers_source voca_drivers_encode voca_calib TIMEOUT 300)

@@ -88,6 +88,7 @@ VideoFolderSource::VideoFolderSource(Dataset dataset, const ReplayOptions& optio
           videos[c].string(), stream.num_frames, dataset_.frames.size(), context));
     }
     info_.streams[c] = stream;
+    info_.stream_names[c] = videos[c].string();
   }
   const decode::StreamInfo& left = info_.streams[0];
   const decode::StreamInfo& right = info_.streams[1];

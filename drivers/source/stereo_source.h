@@ -44,6 +44,7 @@ struct SourceInfo {
   bool live = false;
   double nominal_rate_hz = 0.0;               // 0 when unknown
   std::array<decode::StreamInfo, 2> streams;  // kEncoded only
+  std::array<std::string, 2> stream_names;    // kEncoded: each camera's stream in messages (file, URL)
 };
 
 // What went wrong at the source without stopping it (live input).

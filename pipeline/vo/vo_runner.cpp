@@ -139,18 +139,47 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   replay.max_frames = options.max_frames;
   replay.strict = options.strict;
   std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);
-  const SourceInfo& info = source->info();
-  result.description = temp ? fmt::format("{} encoded at {} kbit/s: {}", options.input.string(),
-                                          options.encode_bitrate_bps / 1000, info.description)
-                            : info.description;
+  std::optional<Trajectory> gt;
+  std::string gt_name;
+  if (options.ground_truth) {
+    gt = loadTrajectory(*options.ground_truth);
+    gt_name = options.ground_truth->string();
+  } else if ((gt = loadGroundTruth(dataset))) {
+    gt_name = dataset.ground_truth->string();
+  }
+  VoRunResult run = runVisualOdometryOn(*source, rig, result.config, options, gt, gt_name);
+  run.config_name = result.config_name;
+  if (temp) {
+    run.description = fmt::format("{} encoded at {} kbit/s: {}", options.input.string(),
+                                  options.encode_bitrate_bps / 1000, run.description);
+  }
+  run.warnings.insert(run.warnings.begin(), result.warnings.begin(), result.warnings.end());
+  if (const auto* video = dynamic_cast<const VideoFolderSource*>(source.get())) {
+    for (const std::string& warning : video->warnings()) run.warnings.push_back(warning);
+  }
+  if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
+  return run;
+}
+
+VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, const VocaConfig& config,
+                                const VoRunOptions& options, const std::optional<Trajectory>& ground_truth,
+                                const std::string& ground_truth_name) {
+  VoRunResult result;
+  result.config = config;
+  if (options.mode) result.config.frontend.prior_mode = *options.mode;
+  const std::function<bool()> stop_requested = options.pipeline.stop_requested
+                                                   ? options.pipeline.stop_requested
+                                                   : std::function<bool()>(platform::stopRequested);
+  const SourceInfo& info = source.info();
+  result.description = info.description;
   result.width = info.width;
   result.height = info.height;
   for (int c = 0; c < 2; ++c) {
     const CameraCalibration& camera = rig.cameras[static_cast<std::size_t>(c)];
     if (info.width != camera.width || info.height != camera.height) {
       throw InputError(fmt::format("{}: images are {}x{} but the calibration {} says {}x{} for camera {}",
-                                   options.input.string(), info.width, info.height, rig.source, camera.width,
-                                   camera.height, c));
+                                   info.description, info.width, info.height, rig.source, camera.width, camera.height,
+                                   c));
     }
   }
   result.has_motion = info.kind == SourceKind::kEncoded;
@@ -159,7 +188,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   SourceStageOptions source_options;
   source_options.realtime = options.realtime;
   source_options.speed = options.speed;
-  SourceStageAdapter source_stage(*source, source_options);
+  SourceStageAdapter source_stage(source, source_options);
   std::vector<Stage*> chain;
   std::unique_ptr<DecodeStage> decode_stage;
   int decode_position = -1;
@@ -168,7 +197,9 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
     decode_options.decoder.backend = options.decoder;
     decode_options.decoder.strict = options.strict;
     decode_options.decoder.log_choice = false;
-    decode_options.names = {dataset.video_left.string(), dataset.video_right.string()};
+    for (std::size_t c = 0; c < 2; ++c) {
+      decode_options.names[c] = info.stream_names[c].empty() ? fmt::format("cam{}", c) : info.stream_names[c];
+    }
     decode_stage = std::make_unique<DecodeStage>(info.streams, decode_options);
     result.decoder_description = decode_stage->description();
     chain.push_back(decode_stage.get());
@@ -214,6 +245,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
         std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position);
     sinks.push_back(progress.get());
   }
+  sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
   SinkStage sink(sinks);
   chain.push_back(&sink);
 
@@ -231,30 +263,18 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   result.rows = statistics.rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
-  if (const auto* video = dynamic_cast<const VideoFolderSource*>(source.get())) {
-    for (const std::string& warning : video->warnings()) result.warnings.push_back(warning);
-  }
 
-  if (options.estimate && options.keep_trajectory && !result.trajectory.poses.empty()) {
-    std::optional<Trajectory> gt;
-    if (options.ground_truth) {
-      gt = loadTrajectory(*options.ground_truth);
-      result.ground_truth = options.ground_truth->string();
-    } else if ((gt = loadGroundTruth(dataset))) {
-      result.ground_truth = dataset.ground_truth->string();
-    }
-    if (gt) {
-      EvalOptions eval_options;
-      eval_options.expected_frames = static_cast<std::size_t>(info.expected_frames);
-      try {
-        result.eval = evaluateTrajectory(result.trajectory, *gt, eval_options);
-      } catch (const InputError& e) {
-        result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", result.ground_truth, e.what()));
-        result.ground_truth.clear();
-      }
+  if (options.estimate && options.keep_trajectory && ground_truth && !result.trajectory.poses.empty()) {
+    result.ground_truth = ground_truth_name;
+    EvalOptions eval_options;
+    eval_options.expected_frames = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
+    try {
+      result.eval = evaluateTrajectory(result.trajectory, *ground_truth, eval_options);
+    } catch (const InputError& e) {
+      result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", ground_truth_name, e.what()));
+      result.ground_truth.clear();
     }
   }
-  if (!options.statistics_file.empty()) writeStatisticsJson(result, options.statistics_file);
   return result;
 }
 

@@ -15,7 +15,9 @@
 #include <vector>
 
 #include "drivers/decode/backend.h"
+#include "drivers/source/stereo_source.h"
 #include "pipeline/runtime/runner.h"
+#include "pipeline/sinks/sink_stage.h"
 #include "pipeline/sinks/statistics_sink.h"
 #include "voca/config/config.h"
 #include "voca/eval/evaluate.h"
@@ -42,6 +44,7 @@ struct VoRunOptions {
   std::filesystem::path statistics_file;  // JSON: totals, per-stage latency, drops, per-frame rows
   std::filesystem::path overlay_file;     // .mp4 of the left camera with the tracks drawn
   bool keep_trajectory = true;            // in memory too (for evaluation and callers)
+  std::vector<FrameSink*> extra_sinks;    // also given every finished frame, after the built-in sinks
 
   // How to run.
   PipelineOptions pipeline;  // threads, pins, scheduling, memory locking, trace file, stop request
@@ -81,6 +84,14 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
 // config; images that do not match the calibration). A stage failing during the run does not throw:
 // the result carries it in pipeline.error, with everything estimated up to then.
 VoRunResult runVisualOdometry(const VoRunOptions& options);
+
+// The same on an input that is already open (a live camera, a network stream, a test's source):
+// options' input, calibration, config, ground_truth, encode_bitrate_bps and max_frames are not used;
+// its mode still overrides the config's. Does not write options.statistics_file (the caller does,
+// after adding its own warnings). ground_truth, when given, is evaluated against.
+VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, const VocaConfig& config,
+                                const VoRunOptions& options, const std::optional<Trajectory>& ground_truth = {},
+                                const std::string& ground_truth_name = {});
 
 // The end-of-run summary `voca run` prints (frames, keyframes, resets, ms per frame, ATE/RTE).
 void printRunSummary(const VoRunResult& result, std::FILE* out);

@@ -18,6 +18,7 @@
 #include "drivers/decode/video_decoder.h"
 #include "tools/voca/bench_backend.h"
 #include "tools/voca/bench_frontend.h"
+#include "tools/voca/bench_pipeline.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 
@@ -224,6 +225,8 @@ const std::vector<BenchMode>& benchModes() {
   static const std::vector<BenchMode> modes = {
       {"decode", "Decoder throughput: full decode with/without MV export, MV-only parse", configureDecodeBench},
       {"frontend", "Frontend CPU time per stereo frame for each prior mode", voca::cli::configureFrontendBench},
+      {"pipeline", "Whole-pipeline frames/s offline (1 thread vs staged), latency at real rate, peak memory",
+       voca::cli::configurePipelineBench},
       {"backend", "Estimator cost per frame on synthetic observations (7 keyframes, ~200 points)",
        voca::cli::configureBackendBench},
   };

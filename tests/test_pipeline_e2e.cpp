@@ -1,0 +1,288 @@
+// The VO through the staged pipeline on real and rendered sequences: pipelined runs write the same
+// trajectory as single-threaded ones byte for byte; damaged packets are skipped and listed (or stop
+// the run with --strict); a failing or early-ending source leaves a clean, parseable result; SIGINT
+// and SIGTERM sent to `voca run` write everything estimated so far and remove temporary folders.
+
+#include <doctest/doctest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/decode/demuxer.h"
+#include "drivers/source/dataset_source.h"
+#include "pipeline/vo/vo_runner.h"
+#include "tests/test_support.h"
+#include "voca/calib/calibration.h"
+#include "voca/trajectory/trajectory.h"
+
+extern char** environ;
+
+using namespace voca;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string fileText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A rendered 2 s sequence with fast motion and its 500 kbit/s encoding, made once per test run.
+struct Rendered {
+  test::ScratchDir dir{"pipeline-e2e"};
+  fs::path raw = dir / "synth";
+  fs::path video = dir / "video";
+  Rendered() {
+    REQUIRE(test::runVoca("synth --out " + raw.string() + " --motion aggressive --seconds 2 --supersample 1") == 0);
+    REQUIRE(test::runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k") == 0);
+  }
+};
+
+const Rendered& rendered() {
+  static const Rendered sequence;
+  return sequence;
+}
+
+pipeline::VoRunOptions quietRun(const fs::path& input, const fs::path& trajectory, int threads) {
+  pipeline::VoRunOptions options;
+  options.input = input;
+  options.trajectory_file = trajectory;
+  options.progress = false;
+  options.pipeline.threads = threads;
+  return options;
+}
+
+// Runs with one thread, two threads and one thread per stage; the three files must be identical.
+void expectSameTrajectory(const std::string& name, pipeline::VoRunOptions options) {
+  test::ScratchDir dir("pipeline-determinism");
+  std::string reference;
+  for (const int threads : {1, 2, 0}) {
+    options.trajectory_file = dir / ("traj_" + std::to_string(threads) + ".txt");
+    options.pipeline.threads = threads;
+    const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+    INFO(name << ", threads option " << threads << " (" << result.pipeline.threads << " threads)");
+    REQUIRE_FALSE(result.pipeline.error);
+    CHECK(result.pipeline.dropped == 0);
+    CHECK(result.frames == result.pipeline.produced);
+    const std::string text = fileText(options.trajectory_file);
+    CHECK(std::count(text.begin(), text.end(), '\n') == result.frames + 1);  // header + a row per frame
+    if (threads == 1) {
+      reference = text;
+    } else {
+      CHECK(text == reference);
+    }
+  }
+}
+
+// Overwrites the slice data of packet `index` of a camera's video with noise, in place.
+void damagePacket(const fs::path& video, int index) {
+  decode::Demuxer demuxer(video);
+  decode::Packet packet;
+  for (int i = 0; i <= index; ++i) REQUIRE(demuxer.read(packet));
+  std::string bytes = fileText(video);
+  const std::string needle(packet.bytes.begin(), packet.bytes.begin() + std::min<std::size_t>(64, packet.bytes.size()));
+  const std::size_t at = bytes.find(needle);
+  REQUIRE(at != std::string::npos);
+  std::mt19937 rng(5);
+  // Past the 4-byte length prefix and the slice header's first bytes: the macroblock data is garbage.
+  for (std::size_t i = at + 12; i < at + packet.bytes.size(); ++i) bytes[i] = static_cast<char>(rng());
+  std::ofstream(video, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Copies a video folder (small: two short videos and text files).
+void copyFolder(const fs::path& from, const fs::path& to) { fs::copy(from, to, fs::copy_options::recursive); }
+
+// Wraps a dataset source: fails with "device disappeared" at frame fail_at, or ends at end_at.
+class FaultySource final : public StereoSource {
+ public:
+  FaultySource(std::unique_ptr<StereoSource> inner, std::int64_t fail_at, std::int64_t end_at)
+      : inner_(std::move(inner)), fail_at_(fail_at), end_at_(end_at) {}
+  const SourceInfo& info() const override { return inner_->info(); }
+  bool next(EncodedStereoPacket& packet) override {
+    if (count_ == fail_at_) throw RuntimeFailure("camera: device disappeared");
+    if (count_ == end_at_) return false;
+    ++count_;
+    return inner_->next(packet);
+  }
+
+ private:
+  std::unique_ptr<StereoSource> inner_;
+  std::int64_t fail_at_, end_at_;
+  std::int64_t count_ = 0;
+};
+
+// Starts `voca <args>` with TMPDIR set, output to a log; returns the pid.
+pid_t spawnVoca(const std::string& args, const fs::path& tmpdir, const fs::path& log) {
+  const std::string command = "TMPDIR=" + tmpdir.string() + " exec " + std::string(VOCA_BINARY_DIR) + "/bin/voca " +
+                              args + " > " + log.string() + " 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
+  pid_t pid = 0;
+  REQUIRE(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char* const*>(argv), environ) == 0);
+  return pid;
+}
+
+std::size_t countRows(const fs::path& trajectory) {
+  const std::string text = fileText(trajectory);
+  const std::size_t lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  return lines > 0 ? lines - 1 : 0;  // the header line
+}
+
+}  // namespace
+
+TEST_CASE("pipeline e2e: pipelined runs write the single-threaded trajectory byte for byte") {
+  SUBCASE("rendered sequence at 500 kbit/s, VOCA and baseline modes") {
+    pipeline::VoRunOptions options = quietRun(rendered().video, {}, 1);
+    expectSameTrajectory("synthetic mv_parallel_of", options);
+    options.mode = PriorMode::kNone;
+    expectSameTrajectory("synthetic none", options);
+  }
+  SUBCASE("micro EuRoC encoded at 500 kbit/s") {
+    const auto data = test::sharedData("euroc_v101_micro");
+    if (!data) return;
+    // Encoded once, so the three runs decode the same video.
+    test::ScratchDir dir("pipeline-euroc");
+    REQUIRE(pipeline::encodeForReplay(*data, dir / "video", 500000, std::nullopt, false, {}));
+    expectSameTrajectory("micro EuRoC 500k", quietRun(dir / "video", {}, 1));
+  }
+  SUBCASE("KITTI 06 raw: the stereo guess uses the backend's depth through the fixed-lag channel") {
+    const auto data = test::sharedData("kitti06_first51/sequences/06");
+    if (!data) return;
+    expectSameTrajectory("KITTI 06", quietRun(*data, {}, 1));
+  }
+}
+
+TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --strict stops naming the frame") {
+  test::ScratchDir dir("pipeline-damaged");
+  const fs::path video = dir / "video";
+  copyFolder(rendered().video, video);
+  damagePacket(video / "mav0" / "cam0" / "data.mp4", 24);
+
+  pipeline::VoRunOptions options = quietRun(video, dir / "traj.txt", 0);
+  const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(result.pipeline.error);
+  CHECK(result.pipeline.damaged >= 1);
+  REQUIRE_FALSE(result.pipeline.released.empty());
+  CHECK(result.pipeline.released.front().frame_index == 24);
+  CHECK(result.pipeline.released.front().reason == pipeline::ReleaseReason::kDamaged);
+  CHECK(result.frames + result.pipeline.damaged == 40);
+  CHECK(countRows(dir / "traj.txt") == static_cast<std::size_t>(result.frames));
+  // The frame after the gap knows it follows one, and the run keeps tracking.
+  bool gap_seen = false;
+  for (const pipeline::FrameRecord& row : result.rows) gap_seen |= row.missing_before > 0;
+  CHECK(gap_seen);
+  CHECK(result.backend.resets == 0);
+
+  options.strict = true;
+  options.trajectory_file = dir / "strict.txt";
+  const pipeline::VoRunResult strict = pipeline::runVisualOdometry(options);
+  REQUIRE(strict.pipeline.error);
+  CHECK(strict.pipeline.error->stage == "decode");
+  CHECK(strict.pipeline.error->frame_index == 24);
+  CHECK(strict.pipeline.error->message.find("cam0") != std::string::npos);
+  // Everything before the damage was estimated and written.
+  CHECK(countRows(dir / "strict.txt") == 24);
+}
+
+TEST_CASE("pipeline e2e: a source that fails or ends early leaves a clean result") {
+  const Dataset dataset = openDataset(rendered().video);
+  const StereoRig rig = loadCalibration(*dataset.calibration);
+  test::ScratchDir dir("pipeline-faulty-source");
+  for (const int threads : {1, 0}) {
+    INFO("threads " << threads);
+    FaultySource failing(openDatasetSource(dataset), 17, -1);
+    pipeline::VoRunOptions options = quietRun({}, dir / "failing.txt", threads);
+    const pipeline::VoRunResult failed = pipeline::runVisualOdometryOn(failing, rig, VocaConfig{}, options);
+    REQUIRE(failed.pipeline.error);
+    CHECK(failed.pipeline.error->stage == "read");
+    CHECK(failed.pipeline.error->message.find("device disappeared") != std::string::npos);
+    CHECK(failed.frames == 17);
+    CHECK(countRows(dir / "failing.txt") == 17);
+
+    FaultySource ending(openDatasetSource(dataset), -1, 12);
+    options.trajectory_file = dir / "ending.txt";
+    const pipeline::VoRunResult ended = pipeline::runVisualOdometryOn(ending, rig, VocaConfig{}, options);
+    CHECK_FALSE(ended.pipeline.error);
+    CHECK(ended.frames == 12);
+    CHECK(loadTrajectory(dir / "ending.txt").poses.size() == 12);
+  }
+}
+
+TEST_CASE("pipeline e2e: SIGINT and SIGTERM stop voca run cleanly; a second signal exits at once") {
+  test::ScratchDir dir("pipeline-signals");
+  const fs::path tmp = dir / "tmp";
+  fs::create_directories(tmp);
+  struct Case {
+    int signal;
+    int expected_exit;
+  };
+  for (const Case c : {Case{SIGINT, 130}, Case{SIGTERM, 143}}) {
+    INFO("signal " << c.signal);
+    const fs::path trajectory = dir / ("traj_" + std::to_string(c.signal) + ".txt");
+    const fs::path log = dir / ("log_" + std::to_string(c.signal) + ".txt");
+    // --encode makes a temporary folder; --realtime paces the 2 s sequence so the signal lands mid-run.
+    const pid_t pid = spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " +
+                                    trajectory.string() + " --stats " + (dir / "stats.json").string(),
+                                tmp, log);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (countRows(trajectory) < 5 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    REQUIRE(countRows(trajectory) >= 5);
+    kill(pid, c.signal);
+    int status = 0;
+    REQUIRE(waitpid(pid, &status, 0) == pid);
+    INFO(fileText(log));
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == c.expected_exit);
+    // Every frame estimated before the stop is in the file, and it parses.
+    const Trajectory written = loadTrajectory(trajectory);
+    CHECK(written.poses.size() < 40);
+    CHECK(fileText(log).find("after " + std::to_string(written.poses.size()) + " frames") != std::string::npos);
+    CHECK(fs::exists(dir / "stats.json"));
+    CHECK(fs::is_empty(tmp));  // the encoded temporary folder is gone
+  }
+  // A second signal ends the process at once, whatever it was doing.
+  const pid_t pid =
+      spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " + (dir / "twice.txt").string(),
+                tmp, dir / "twice.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(pid, SIGINT);
+  kill(pid, SIGINT);
+  int status = 0;
+  REQUIRE(waitpid(pid, &status, 0) == pid);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+}
+
+TEST_CASE("pipeline e2e: live-rate replay paces the input and reports latency; outputs are written") {
+  test::ScratchDir dir("pipeline-realtime");
+  pipeline::VoRunOptions options = quietRun(rendered().video, dir / "traj.txt", 0);
+  options.realtime = true;
+  options.statistics_file = dir / "stats.json";
+  options.pipeline.trace_path = dir / "trace.json";
+  options.trajectory_format = TrajectoryFormat::kKitti;
+  const auto start = std::chrono::steady_clock::now();
+  const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  REQUIRE_FALSE(result.pipeline.error);
+  // 40 frames at 20 Hz: 39 intervals of 50 ms.
+  CHECK(seconds >= 1.9);
+  CHECK(result.pipeline.completed + result.pipeline.dropped == 40);
+  CHECK(result.pipeline.end_to_end.count() == result.pipeline.completed);
+  // KITTI rows: 12 numbers, one row per estimated frame.
+  const Trajectory kitti = loadTrajectory(dir / "traj.txt", TrajectoryFormat::kKitti);
+  CHECK(kitti.poses.size() == static_cast<std::size_t>(result.frames));
+  const std::string stats = fileText(dir / "stats.json");
+  CHECK(stats.find("\"frame_rows\"") != std::string::npos);
+  CHECK(stats.find("\"end_to_end\"") != std::string::npos);
+  CHECK(fs::file_size(dir / "trace.json") > 1000);
+}

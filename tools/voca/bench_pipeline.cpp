@@ -1,0 +1,153 @@
+// `voca bench pipeline`: the staged pipeline measured as a user runs it, decode included.
+
+#include "tools/voca/bench_pipeline.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <fstream>
+#include <memory>
+#include <thread>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/encode/video_encoder.h"
+#include "pipeline/runtime/chrome_trace.h"
+#include "pipeline/vo/vo_runner.h"
+#include "platform/filesystem/temp_dir.h"
+#include "platform/realtime/stop_signal.h"
+#include "platform/realtime/thread_control.h"
+#include "tools/voca/pipeline_cli.h"
+#include "voca/core/error.h"
+
+namespace voca::cli {
+
+namespace {
+
+struct PipelineBenchOptions {
+  std::string input;
+  std::string config;
+  std::string bitrate = "500k";
+  std::string mode;
+  int repeat = 3;
+  int frames = 0;
+  bool skip_realtime = false;
+};
+
+// Peak resident memory of this process since the last reset, in MiB (VmHWM).
+double peakRssMiB() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
+// Starts a new peak-memory measurement (Linux 4.0+: writing 5 to clear_refs resets VmHWM).
+void resetPeakRss() { std::ofstream("/proc/self/clear_refs") << "5"; }
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int runPipelineBench(const PipelineBenchOptions& opts) {
+  if (opts.repeat < 1) throw InputError(fmt::format("--repeat: expected at least 1, got {}", opts.repeat));
+  platform::installStopHandlers();
+  std::filesystem::path input = opts.input;
+  std::optional<TempDir> encoded;
+  if (openDataset(input).layout != DatasetLayout::kVocaVideo) {
+    encoded.emplace("voca-bench");
+    if (!pipeline::encodeForReplay(input, encoded->path(), encode::parseBitrate(opts.bitrate), std::nullopt, true,
+                                   platform::stopRequested)) {
+      return platform::interruptedExitCode(platform::stopSignal());
+    }
+    input = encoded->path();
+  }
+  const auto makeOptions = [&](int threads) {
+    pipeline::VoRunOptions options;
+    options.input = input;
+    if (!opts.config.empty()) options.config = opts.config;
+    if (!opts.mode.empty()) options.mode = requirePriorMode(opts.mode, "--mode");
+    options.max_frames = opts.frames;
+    options.progress = false;
+    options.keep_trajectory = false;
+    options.pipeline.threads = threads;
+    return options;
+  };
+
+  fmt::print("machine: {} cores available to this process\n", platform::availableCores());
+  struct Layout {
+    const char* label;
+    int threads;
+    std::vector<double> fps;
+    double rss = 0.0;
+    pipeline::VoRunResult last;
+  };
+  std::vector<Layout> layouts = {{"1 thread", 1, {}, 0.0, {}}, {"staged (one thread per stage)", 0, {}, 0.0, {}}};
+  for (int r = 0; r < opts.repeat; ++r) {
+    for (Layout& layout : layouts) {
+      resetPeakRss();
+      layout.last = pipeline::runVisualOdometry(makeOptions(layout.threads));
+      if (layout.last.pipeline.error || layout.last.stop_signal != 0) {
+        return reportRunEnd(layout.last, PipelineCli{}, "bench");
+      }
+      layout.rss = std::max(layout.rss, peakRssMiB());
+      const pipeline::RunReport& p = layout.last.pipeline;
+      layout.fps.push_back(static_cast<double>(p.completed) / p.wall_s);
+      fmt::print(stderr, "\r{} run {}/{}: {:.1f} frames/s   ", layout.label, r + 1, opts.repeat, layout.fps.back());
+    }
+  }
+  fmt::print(stderr, "\n");
+  fmt::print("input: {}\n", layouts[0].last.description);
+  fmt::print("offline throughput, decode included (median of {} runs, wall clock):\n", opts.repeat);
+  for (const Layout& layout : layouts) {
+    fmt::print("  {:<32} {:7.1f} stereo frames/s  ({} threads; peak RSS {:.0f} MiB)\n", layout.label,
+               median(layout.fps), layout.last.pipeline.threads, layout.rss);
+  }
+  const double speedup = median(layouts[1].fps) / std::max(median(layouts[0].fps), 1e-9);
+  fmt::print("  pipelining speed-up: {:.2f}x (target >= 1.8x on 2 cores; >= 200 frames/s with faster stages)\n",
+             speedup);
+  fmt::print("where the time goes, staged run (service time per stage):\n");
+  printLatencyReport(layouts[1].last.pipeline, stdout);
+
+  if (!opts.skip_realtime) {
+    pipeline::VoRunOptions options = makeOptions(0);
+    options.realtime = true;
+    resetPeakRss();
+    const pipeline::VoRunResult live = pipeline::runVisualOdometry(options);
+    if (live.pipeline.error || live.stop_signal != 0) return reportRunEnd(live, PipelineCli{}, "bench");
+    const pipeline::LatencyHistogram& e = live.pipeline.end_to_end;
+    fmt::print("at the recording's real rate (--realtime), {} frames, peak RSS {:.0f} MiB (target <= 100):\n",
+               live.pipeline.completed, peakRssMiB());
+    fmt::print("  arrival to pose written: p50 {:.2f} ms, p90 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms; {} dropped\n",
+               static_cast<double>(e.quantileNs(0.5)) * 1e-6, static_cast<double>(e.quantileNs(0.9)) * 1e-6,
+               static_cast<double>(e.quantileNs(0.99)) * 1e-6, static_cast<double>(e.maxNs()) * 1e-6,
+               live.pipeline.dropped);
+    printLatencyReport(live.pipeline, stdout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Runner configurePipelineBench(CLI::App& app) {
+  auto opts = std::make_shared<PipelineBenchOptions>();
+  app.add_option("input", opts->input, "Raw dataset (encoded first at --bitrate) or VOCA video folder")->required();
+  app.add_option("--config", opts->config, "Config JSON file or shipped name (default: euroc)");
+  app.add_option("--mode", opts->mode, "Prior mode (default: the config's)");
+  app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first")->capture_default_str();
+  app.add_option("--repeat", opts->repeat, "Offline runs per thread layout")->capture_default_str();
+  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  app.add_flag("--no-realtime", opts->skip_realtime, "Skip the real-rate latency run");
+  app.footer(
+      "Offline: the whole VO (read, decode, frontend, backend, write; trajectory kept in memory only) with\n"
+      "every stage in one thread, then with one thread per stage, alternating, --repeat times each; prints\n"
+      "the median stereo frames/s of each, the speed-up, peak RSS and the per-stage latency table. Then one\n"
+      "run paced at the recording's timestamps (--realtime) for the latency a live user sees: arrival of a\n"
+      "frame to its pose being written, p50/p90/p99/max, and frames dropped. Measure on an idle machine.");
+  return [opts] { return runPipelineBench(*opts); };
+}
+
+}  // namespace voca::cli
