@@ -1,6 +1,7 @@
-// End-to-end VO runs through the `voca` binary (synth -> encode -> run), checked against ground
-// truth with the paper's metrics: rendered sequences (raw and 500 kbit/s), micro EuRoC (real images,
-// 500 kbit/s) and the first 51 frames of KITTI 06 (real moving stereo).
+// End-to-end VO runs through the pipeline runner (the sequences rendered and encoded with the `voca`
+// binary), checked against ground truth with the paper's metrics: rendered sequences (raw and
+// 500 kbit/s), micro EuRoC (real images, 500 kbit/s) and the first 51 frames of KITTI 06 (real moving
+// stereo).
 
 #include <doctest/doctest.h>
 
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
 #include "voca/eval/evaluate.h"
 #include "voca/trajectory/trajectory.h"
@@ -30,18 +32,20 @@ bool run(const std::string& args, const std::filesystem::path& log) {
   return code == 0;
 }
 
-// Resets and lost frames as `voca run` prints them ("frames: N, keyframes: K, resets: R, lost: L").
-std::pair<int, int> resetsAndLost(const std::filesystem::path& log) {
-  std::ifstream in(log);
-  std::string line;
-  while (std::getline(in, line)) {
-    int frames = 0, keyframes = 0, resets = -1, lost = -1;
-    if (std::sscanf(line.c_str(), "frames: %d, keyframes: %d, resets: %d, lost: %d", &frames, &keyframes, &resets,
-                    &lost) == 4) {
-      return {resets, lost};
-    }
-  }
-  return {-1, -1};
+// The VO on a dataset or video folder through the runner, the trajectory written to `trajectory`.
+pipeline::VoRunResult runVo(const std::string& input, const std::filesystem::path& trajectory,
+                            std::optional<PriorMode> mode = {}, std::int64_t encode_bps = 0,
+                            std::optional<std::filesystem::path> config = {}) {
+  pipeline::VoRunOptions options;
+  options.input = input;
+  options.trajectory_file = trajectory;
+  options.mode = mode;
+  options.encode_bitrate_bps = encode_bps;
+  options.config = config;
+  options.progress = false;
+  pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(result.pipeline.error);
+  return result;
 }
 
 EvalReport evaluate(const std::filesystem::path& est, const Trajectory& gt) {
@@ -59,24 +63,23 @@ TEST_CASE("backend e2e: rendered fast-rotation sequence, raw and at 500 kbit/s, 
   const Trajectory gt = loadTrajectory(raw / "mav0" / "state_groundtruth_estimate0" / "data.csv");
 
   struct Case {
-    std::string name, input, mode;
+    std::string name, input;
+    PriorMode mode;
     double max_ate_m, max_rte_m;
   };
   // Bounds: these runs measured ATE 3-4 mm and RTE 2-5 mm (100 frames, ~20 px/frame image motion,
   // exact ground truth); the bounds leave a factor 3-5 for platform and codec differences while a
   // broken estimator (wrong frame, drift, resets) gives centimetres to metres.
   const Case cases[] = {
-      {"raw", raw.string(), "none", 0.015, 0.010},
-      {"500k-none", (dir / "video").string(), "none", 0.03, 0.015},
-      {"500k-mv_parallel_of", (dir / "video").string(), "mv_parallel_of", 0.03, 0.015},
+      {"raw", raw.string(), PriorMode::kNone, 0.015, 0.010},
+      {"500k-none", (dir / "video").string(), PriorMode::kNone, 0.03, 0.015},
+      {"500k-mv_parallel_of", (dir / "video").string(), PriorMode::kMvParallelOf, 0.03, 0.015},
   };
   for (const Case& c : cases) {
     const auto traj = dir / (c.name + ".txt");
-    const auto log = dir / (c.name + ".log");
-    REQUIRE(run("run " + c.input + " --mode " + c.mode + " --out " + traj.string(), log));
-    const auto [resets, lost] = resetsAndLost(log);
-    CHECK(resets == 0);
-    CHECK(lost == 0);
+    const pipeline::VoRunResult result = runVo(c.input, traj, c.mode);
+    CHECK(result.backend.resets == 0);
+    CHECK(result.backend.lost == 0);
     const EvalReport report = evaluate(traj, gt);
     REQUIRE(report.rte);
     MESSAGE(c.name << ": ATE " << report.ate.stats.rmse << " m, RTE " << report.rte->stats.rmse << " m over "
@@ -93,10 +96,9 @@ TEST_CASE("backend e2e: micro EuRoC at 500 kbit/s completes without reset, RTE b
   test::ScratchDir dir("backend-e2e-euroc");
   const auto traj = dir / "traj.txt";
   const auto gt_file = *data / "gt" / "V1_01_easy_openvins_vicon2gt.csv";
-  REQUIRE(run("run " + data->string() + " --encode 500k --out " + traj.string(), dir / "run.log"));
-  const auto [resets, lost] = resetsAndLost(dir / "run.log");
-  CHECK(resets == 0);
-  CHECK(lost == 0);
+  const pipeline::VoRunResult result = runVo(data->string(), traj, {}, 500000);
+  CHECK(result.backend.resets == 0);
+  CHECK(result.backend.lost == 0);
   const EvalReport report = evaluate(traj, loadTrajectory(gt_file));
   REQUIRE(report.rte);
   MESSAGE("micro EuRoC 500k: ATE " << report.ate.stats.rmse << " m, RTE " << report.rte->stats.rmse << " m");
@@ -113,10 +115,9 @@ TEST_CASE("backend e2e: KITTI 06, first 51 frames, ATE at Basalt's level (0.12 m
   const auto config = dir / "kitti.json";
   std::ofstream(config) << R"({"frontend": {"matching_default_depth_m": 15.0}})";
   const auto traj = dir / "traj.txt";
-  REQUIRE(run("run " + data->string() + " --config " + config.string() + " --out " + traj.string(), dir / "run.log"));
-  const auto [resets, lost] = resetsAndLost(dir / "run.log");
-  CHECK(resets == 0);
-  CHECK(lost == 0);
+  const pipeline::VoRunResult result = runVo(data->string(), traj, {}, 0, config);
+  CHECK(result.backend.resets == 0);
+  CHECK(result.backend.lost == 0);
   // Ground truth is the left camera's pose; with a KITTI calibration the body frame is cam0.
   const Trajectory gt =
       loadTrajectory(*data / ".." / ".." / "poses" / "06.txt", TrajectoryFormat::kKitti, *data / "times.txt");
