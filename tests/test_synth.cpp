@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "tests/test_support.h"
@@ -312,4 +313,52 @@ TEST_CASE("a recorded trajectory is placed inside a room that fits it") {
   // 11.9 m of travel along x does not fit the default 9 m room: it grows to 11.9 + 2 x 0.6.
   CHECK(placement.room.max.x() - placement.room.min.x() == doctest::Approx(11.88 + 1.2));
   CHECK(placement.room.min.z() == doctest::Approx(0.0));
+}
+
+TEST_CASE("motion blur averages the images along the shutter's poses; gain scales the signal") {
+  const voca::CameraCalibration cam = smallPinhole(96, 64);
+  const RayTable rays = makeRayTable(cam);
+  const std::vector<Eigen::Vector3d> no_keep_out;
+  const Scene scene = Scene::generate(SceneConfig(), no_keep_out, 11);
+  RenderSettings settings;
+  settings.noise_sigma = 0.0f;  // exact comparisons: no noise
+
+  // A camera panning while the shutter is open: each pose alone, then all together.
+  std::vector<SE3d> poses;
+  for (int i = 0; i < 4; ++i) poses.push_back(levelCamera(Eigen::Vector3d(-0.5, 0.5, 1.2), -0.3 + 0.02 * i));
+  std::vector<voca::GrayImage> single(poses.size(), voca::GrayImage(cam.width, cam.height, 0));
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    renderRows(scene, rays, poses[i], settings, single[i].view(), 0, cam.height);
+  }
+  voca::GrayImage blurred(cam.width, cam.height, 0);
+  renderRows(scene, rays, poses, settings, blurred.view(), 0, cam.height);
+
+  // The blurred image is the mean of the sharp ones, up to each one's 8-bit rounding.
+  double max_error = 0.0;
+  int differs_from_first = 0;
+  for (std::size_t p = 0; p < blurred.pixelCount(); ++p) {
+    double mean = 0.0;
+    for (const voca::GrayImage& image : single) mean += image.data()[p];
+    mean /= static_cast<double>(single.size());
+    max_error = std::max(max_error, std::abs(mean - blurred.data()[p]));
+    differs_from_first += std::abs(static_cast<int>(blurred.data()[p]) - single[0].data()[p]) > 2;
+  }
+  CHECK(max_error <= 1.0);
+  CHECK(differs_from_first > static_cast<int>(blurred.pixelCount()) / 10);  // the pan really smears the image
+
+  // One pose in the span is the sharp render, byte for byte.
+  voca::GrayImage one(cam.width, cam.height, 0);
+  renderRows(scene, rays, std::span<const SE3d>(poses.data(), 1), settings, one.view(), 0, cam.height);
+  CHECK(std::equal(one.data(), one.data() + one.pixelCount(), single[0].data()));
+
+  // Gain 0.25: a quarter of the signal, up to rounding.
+  RenderSettings dark = settings;
+  dark.gain = 0.25f;
+  voca::GrayImage dim(cam.width, cam.height, 0);
+  renderRows(scene, rays, poses[0], dark, dim.view(), 0, cam.height);
+  double max_gain_error = 0.0;
+  for (std::size_t p = 0; p < dim.pixelCount(); ++p) {
+    max_gain_error = std::max(max_gain_error, std::abs(0.25 * single[0].data()[p] - dim.data()[p]));
+  }
+  CHECK(max_gain_error <= 0.75);
 }

@@ -131,12 +131,47 @@ TEST_CASE("voca synth renders the TUM-VI fisheye rig") {
   CHECK(flat_blocks < blocks / 20);
 }
 
+TEST_CASE("voca synth renders exposure blur and dark scenes: same poses, less contrast and detail") {
+  voca::test::ScratchDir scratch("synth-e2e-blur");
+  const std::string common = " --motion aggressive --seconds 0.15 --noise-sigma 0";  // gradients of the scene only
+  REQUIRE(runVoca("synth --out " + (scratch / "sharp").string() + common) == 0);
+  REQUIRE(runVoca("synth --out " + (scratch / "blur").string() + common + " --exposure 15 --gain 0.4") == 0);
+  const voca::Dataset sharp = voca::openDataset(scratch / "sharp");
+  const voca::Dataset blur = voca::openDataset(scratch / "blur");
+  REQUIRE(sharp.frames.size() == 3);
+  REQUIRE(blur.frames.size() == 3);
+  // Mean brightness and mean horizontal gradient: the gain scales both; blur removes detail on top.
+  const auto measure = [](const fs::path& png) {
+    const voca::GrayImage image = voca::readPngGray(png);
+    double sum = 0.0, gradient = 0.0;
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x + 1 < image.width(); ++x) {
+        sum += image(x, y);
+        gradient += std::abs(static_cast<int>(image(x + 1, y)) - static_cast<int>(image(x, y)));
+      }
+    }
+    const double n = static_cast<double>(image.height()) * (image.width() - 1);
+    return std::pair{sum / n, gradient / n};
+  };
+  const auto [sharp_mean, sharp_gradient] = measure(sharp.frames[2].left);
+  const auto [blur_mean, blur_gradient] = measure(blur.frames[2].left);
+  CHECK(blur_mean == doctest::Approx(0.4 * sharp_mean).epsilon(0.05));
+  // Gain alone would keep 0.4 of the gradient; the streaks must take detail away on top of that.
+  CHECK(blur_gradient < 0.4 * sharp_gradient);
+  // Ground truth is the same motion, sampled at the same timestamps.
+  CHECK(fs::file_size(scratch / "sharp" / "mav0" / "state_groundtruth_estimate0" / "data.csv") ==
+        fs::file_size(scratch / "blur" / "mav0" / "state_groundtruth_estimate0" / "data.csv"));
+}
+
 TEST_CASE("voca synth rejects bad options with a clear error") {
   voca::test::ScratchDir scratch("synth-e2e-bad");
   CHECK(runVoca("synth --out " + (scratch / "a").string() + " --motion sideways") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "b").string() + " --camera /nonexistent/calib.json") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "c").string() + " --rate 0") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "d").string() + " --psf-sigma 9") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "f").string() + " --exposure -1") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "g").string() + " --exposure 60") == 1 << 8);  // > one 50 ms period
+  CHECK(runVoca("synth --out " + (scratch / "h").string() + " --gain 0") == 1 << 8);
   // Two sources of motion at once is a usage error (CLI11's own exit code), not a silent choice.
   CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") != 0);
 }

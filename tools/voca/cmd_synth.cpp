@@ -7,8 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -39,6 +41,8 @@ struct SynthOptions {
   double psf_sigma_px = 0.0;
   int supersample = 3;
   int threads = 2;
+  double exposure_ms = 0.0;  // shutter open time centred on each timestamp; 0 = instantaneous
+  double gain = 1.0;         // sensor gain on the scene's irradiance; < 1 = dark, low contrast
 };
 
 // Sequences start at 1 s rather than 0 so that no tool mistakes the first timestamp for "unset".
@@ -75,6 +79,8 @@ struct Sequence {
   std::vector<int64_t> t_ns;
   std::vector<SE3d> T_world_body;
   voca::synth::RoomBox room;
+  // The body pose at any time (for exposure sampling between frames), clamped to the covered span.
+  std::function<SE3d(int64_t t_ns)> body_pose_at;
 };
 
 Sequence presetSequence(const SynthOptions& options, const voca::StereoRig& rig) {
@@ -88,6 +94,11 @@ Sequence presetSequence(const SynthOptions& options, const voca::StereoRig& rig)
   const SE3d T_cam0_body = rig.cameras[0].T_body_cam.inverse();
   // The preset moves cam0; every camera and the body must keep the clearance.
   const double clearance = kWallClearanceM + 2.0 * rigRadius(rig) + 0.05;
+  const voca::synth::RoomBox room = seq.room;
+  seq.body_pose_at = [preset = *preset, room, clearance, T_cam0_body](int64_t t_ns) {
+    const double t = static_cast<double>(t_ns - kStartNs) * 1e-9;
+    return voca::synth::presetCameraPose(preset, t, room, clearance) * T_cam0_body;
+  };
   for (int k = 0; k < frames; ++k) {
     const double t = static_cast<double>(k) / options.rate_hz;
     seq.t_ns.push_back(kStartNs + static_cast<int64_t>(std::llround(t * 1e9)));
@@ -127,13 +138,19 @@ Sequence fileSequence(const SynthOptions& options, const voca::StereoRig& rig) {
       voca::synth::placeInRoom(positions, voca::synth::RoomBox(), kWallClearanceM + rigRadius(rig) + 0.05);
   seq.room = placement.room;
   for (SE3d& T : seq.T_world_body) T.translation() += placement.offset;
+  seq.body_pose_at = [trajectory, offset = placement.offset, t0, t1](int64_t t_ns) {
+    SE3d T = *voca::interpolatePose(trajectory, std::clamp(t_ns, t0, t1));
+    T.translation() += offset;
+    return T;
+  };
   return seq;
 }
 
 // Renders one camera image with `threads` workers pulling row blocks from a shared counter; the
 // renderer makes every pixel independent of the split, so the bytes do not depend on it.
-void renderImage(const voca::synth::Scene& scene, const voca::synth::RayTable& rays, const SE3d& T_world_cam,
-                 const voca::synth::RenderSettings& settings, voca::GrayImage& image, int threads) {
+void renderImage(const voca::synth::Scene& scene, const voca::synth::RayTable& rays,
+                 std::span<const SE3d> exposure_poses, const voca::synth::RenderSettings& settings,
+                 voca::GrayImage& image, int threads) {
   constexpr int kBlockRows = 40;
   image.resize(rays.width(), rays.height());
   const voca::ImageView<std::uint8_t> view = image.view();
@@ -142,7 +159,8 @@ void renderImage(const voca::synth::Scene& scene, const voca::synth::RayTable& r
     for (;;) {
       const int y0 = next.fetch_add(kBlockRows);
       if (y0 >= rays.height()) return;
-      voca::synth::renderRows(scene, rays, T_world_cam, settings, view, y0, std::min(y0 + kBlockRows, rays.height()));
+      voca::synth::renderRows(scene, rays, exposure_poses, settings, view, y0,
+                              std::min(y0 + kBlockRows, rays.height()));
     }
   };
   std::vector<std::thread> pool;
@@ -160,6 +178,10 @@ int runSynth(const SynthOptions& options) {
   }
   if (options.supersample < 1 || options.supersample > 8) throw voca::InputError("--supersample: expected 1..8");
   if (options.threads < 1) throw voca::InputError("--threads: expected >= 1");
+  if (!(options.exposure_ms >= 0.0 && options.exposure_ms * options.rate_hz <= 1000.0)) {
+    throw voca::InputError("--exposure: expected 0 ms up to one frame period");
+  }
+  if (!(options.gain > 0.0 && options.gain <= 4.0)) throw voca::InputError("--gain: expected 0 < gain <= 4");
 
   const auto start = std::chrono::steady_clock::now();
   const voca::StereoRig rig = loadRig(options.camera);
@@ -192,8 +214,34 @@ int runSynth(const SynthOptions& options) {
   voca::EurocWriter writer(options.out, 2);
   std::vector<voca::GrayImage> images(2);
   auto last_report = std::chrono::steady_clock::now();
+  const voca::CameraCalibration& cam0 = rig.cameras[0];
+  const voca::synth::Project project_cam0 = [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
+    return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width && uv.y() < cam0.height;
+  };
+  std::vector<SE3d> exposure_body;  // body poses while the shutter is open, for the current frame
+  std::vector<SE3d> exposure_cam;
+  std::vector<double> blur_px;
   for (int k = 0; k < frames; ++k) {
+    exposure_body.assign(1, seq.T_world_body[k]);
+    if (options.exposure_ms > 0.0) {
+      // Enough poses that consecutive ones move the image by at most about a pixel, measured on cam0
+      // between the shutter's opening and closing.
+      const auto half_ns = static_cast<int64_t>(std::llround(options.exposure_ms * 0.5e6));
+      const SE3d ends[2] = {seq.body_pose_at(seq.t_ns[k] - half_ns) * cam0.T_body_cam,
+                            seq.body_pose_at(seq.t_ns[k] + half_ns) * cam0.T_body_cam};
+      const double streak_px = voca::synth::measureImageMotion(scene, rays[0], project_cam0, ends, 32).p90_px;
+      blur_px.push_back(streak_px);
+      const int samples = std::clamp(static_cast<int>(std::ceil(streak_px)) + 1, 2, 24);
+      exposure_body.clear();
+      for (int i = 0; i < samples; ++i) {
+        const double f = (static_cast<double>(i) + 0.5) / static_cast<double>(samples) - 0.5;
+        exposure_body.push_back(
+            seq.body_pose_at(seq.t_ns[k] + static_cast<int64_t>(std::llround(f * 2.0 * static_cast<double>(half_ns)))));
+      }
+    }
     for (int c = 0; c < 2; ++c) {
+      exposure_cam.clear();
+      for (const SE3d& T : exposure_body) exposure_cam.push_back(T * rig.cameras[c].T_body_cam);
       voca::synth::RenderSettings settings;
       settings.noise_sigma = static_cast<float>(options.noise_sigma);
       settings.psf_sigma_px = static_cast<float>(options.psf_sigma_px);
@@ -201,8 +249,8 @@ int runSynth(const SynthOptions& options) {
       settings.frame_index = static_cast<std::uint64_t>(k);
       settings.camera_index = c;
       settings.supersample = options.supersample;
-      renderImage(scene, rays[c], seq.T_world_body[k] * rig.cameras[c].T_body_cam, settings, images[c],
-                  options.threads);
+      settings.gain = static_cast<float>(options.gain);
+      renderImage(scene, rays[c], exposure_cam, settings, images[c], options.threads);
     }
     const voca::GrayView views[2] = {images[0].view(), images[1].view()};
     writer.addFrame(seq.t_ns[k], views);
@@ -227,18 +275,18 @@ int runSynth(const SynthOptions& options) {
   // Report the true optical flow of cam0 on a coarse grid, so users see what the preset produces.
   std::vector<SE3d> T_world_cam0;
   for (const SE3d& T : seq.T_world_body) T_world_cam0.push_back(T * rig.cameras[0].T_body_cam);
-  const voca::CameraCalibration& cam0 = rig.cameras[0];
-  const voca::synth::ImageMotionStats motion = voca::synth::measureImageMotion(
-      scene, rays[0],
-      [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
-        return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width && uv.y() < cam0.height;
-      },
-      T_world_cam0, 32);
+  const voca::synth::ImageMotionStats motion =
+      voca::synth::measureImageMotion(scene, rays[0], project_cam0, T_world_cam0, 32);
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   fmt::print(stderr, "voca synth: wrote {} ({} stereo frames, ground truth, calib.json) in {:.1f} s\n",
              options.out.string(), frames, total);
   fmt::print(stderr, "voca synth: cam0 image motion per frame: median {:.1f} px, p90 {:.1f} px, max {:.1f} px\n",
              motion.median_px, motion.p90_px, motion.max_px);
+  if (!blur_px.empty()) {
+    std::sort(blur_px.begin(), blur_px.end());
+    fmt::print(stderr, "voca synth: cam0 motion blur streak ({} ms exposure): median {:.1f} px, max {:.1f} px\n",
+               options.exposure_ms, blur_px[blur_px.size() / 2], blur_px.back());
+  }
   return 0;
 }
 
@@ -277,6 +325,14 @@ const bool registered = voca::cli::registerCommand(
        app.add_option("--supersample", options->supersample, "n x n samples in pixels crossed by an edge (1..8)")
            ->capture_default_str();
        app.add_option("--threads", options->threads, "Rendering threads")->capture_default_str();
+       app.add_option("--exposure", options->exposure_ms,
+                      "Motion blur: shutter open for this many ms, centred on each timestamp (0 = instantaneous; "
+                      "EuRoC's cameras expose up to ~10 ms in dim halls)")
+           ->capture_default_str();
+       app.add_option("--gain", options->gain,
+                      "Sensor gain on the scene's brightness before noise: < 1 renders a dark, low-contrast scene "
+                      "(e.g. 0.25), where the same noise weighs 4x more")
+           ->capture_default_str();
        return [options] { return runSynth(*options); };
      }});
 

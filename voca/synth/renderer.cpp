@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 namespace voca::synth {
 
@@ -87,9 +88,13 @@ Eigen::Vector3f RayTable::bearingAt(int x, int y, float dx, float dy) const {
 
 void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_cam, const RenderSettings& settings,
                 ImageView<std::uint8_t> out, int y_begin, int y_end) {
+  renderRows(scene, rays, std::span<const SE3d>(&T_world_cam, 1), settings, out, y_begin, y_end);
+}
+
+void renderRows(const Scene& scene, const RayTable& rays, std::span<const SE3d> exposure_poses,
+                const RenderSettings& settings, ImageView<std::uint8_t> out, int y_begin, int y_end) {
   const int width = rays.width();
   const int height = rays.height();
-  const CameraPose pose{T_world_cam.rotationMatrix().cast<float>(), T_world_cam.translation().cast<float>()};
 
   // Lens PSF: a sampled, normalised Gaussian truncated at 3 sigma (radius 0 disables it).
   const float sigma = std::max(settings.psf_sigma_px, 0.0f);
@@ -113,49 +118,57 @@ void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_ca
   const std::size_t rows = static_cast<std::size_t>(std::max(row1 - row0, 0));
   std::vector<float> value(rows * width, 0.0f);
   std::vector<int> surface(rows * width, -1);
-  for (int y = row0; y < row1; ++y) {
-    const std::size_t base = static_cast<std::size_t>(y - row0) * width;
-    for (int x = 0; x < width; ++x) {
-      if (!rays.valid(x, y)) {
-        surface[base + x] = -2;
-        continue;
-      }
-      value[base + x] = sampleRay(scene, pose, rays.bearing(x, y), rays.pixelAngle(x, y), &surface[base + x]);
-    }
-  }
-
-  // Pixel irradiance: the centre sample, or n x n stratified samples where an edge may cross the pixel.
+  // Pixel irradiance, averaged over the poses the camera passes through while the shutter is open:
+  // the centre sample, or n x n stratified samples where an edge may cross the pixel.
   const int n = std::max(settings.supersample, 1);
   const float inv_n = 1.0f / static_cast<float>(n);
   std::vector<float> irradiance(static_cast<std::size_t>(std::max(irr1 - irr0, 0)) * width, 0.0f);
-  for (int y = irr0; y < irr1; ++y) {
-    const std::size_t base = static_cast<std::size_t>(y - row0) * width;
-    float* irr_row = irradiance.data() + static_cast<std::size_t>(y - irr0) * width;
-    for (int x = 0; x < width; ++x) {
-      const int id = surface[base + x];
-      if (id == -2) continue;
-      float v = value[base + x];
-      // A different surface in a 4-neighbour means an edge may cross this pixel: integrate it.
-      bool edge = false;
-      if (x > 0 && surface[base + x - 1] != id) edge = true;
-      if (x + 1 < width && surface[base + x + 1] != id) edge = true;
-      if (y > 0 && surface[base + x - width] != id) edge = true;
-      if (y + 1 < height && surface[base + x + width] != id) edge = true;
-      if (edge && n > 1) {
-        const float angle = rays.pixelAngle(x, y) * inv_n;
-        float sum = 0.0f;
-        for (int sy = 0; sy < n; ++sy) {
-          for (int sx = 0; sx < n; ++sx) {
-            const float dx = (static_cast<float>(sx) + 0.5f) * inv_n - 0.5f;
-            const float dy = (static_cast<float>(sy) + 0.5f) * inv_n - 0.5f;
-            sum += sampleRay(scene, pose, rays.bearingAt(x, y, dx, dy), angle, nullptr);
-          }
+  for (const SE3d& T_world_cam : exposure_poses) {
+    const CameraPose pose{T_world_cam.rotationMatrix().cast<float>(), T_world_cam.translation().cast<float>()};
+    for (int y = row0; y < row1; ++y) {
+      const std::size_t base = static_cast<std::size_t>(y - row0) * width;
+      for (int x = 0; x < width; ++x) {
+        if (!rays.valid(x, y)) {
+          surface[base + x] = -2;
+          continue;
         }
-        v = sum * inv_n * inv_n;
+        value[base + x] = sampleRay(scene, pose, rays.bearing(x, y), rays.pixelAngle(x, y), &surface[base + x]);
       }
-      irr_row[x] = v;
+    }
+
+    for (int y = irr0; y < irr1; ++y) {
+      const std::size_t base = static_cast<std::size_t>(y - row0) * width;
+      float* irr_row = irradiance.data() + static_cast<std::size_t>(y - irr0) * width;
+      for (int x = 0; x < width; ++x) {
+        const int id = surface[base + x];
+        if (id == -2) continue;
+        float v = value[base + x];
+        // A different surface in a 4-neighbour means an edge may cross this pixel: integrate it.
+        bool edge = false;
+        if (x > 0 && surface[base + x - 1] != id) edge = true;
+        if (x + 1 < width && surface[base + x + 1] != id) edge = true;
+        if (y > 0 && surface[base + x - width] != id) edge = true;
+        if (y + 1 < height && surface[base + x + width] != id) edge = true;
+        if (edge && n > 1) {
+          const float angle = rays.pixelAngle(x, y) * inv_n;
+          float sum = 0.0f;
+          for (int sy = 0; sy < n; ++sy) {
+            for (int sx = 0; sx < n; ++sx) {
+              const float dx = (static_cast<float>(sx) + 0.5f) * inv_n - 0.5f;
+              const float dy = (static_cast<float>(sy) + 0.5f) * inv_n - 0.5f;
+              sum += sampleRay(scene, pose, rays.bearingAt(x, y, dx, dy), angle, nullptr);
+            }
+          }
+          v = sum * inv_n * inv_n;
+        }
+        irr_row[x] += v;
+      }
     }
   }
+  // Exposure: the mean over the shutter's poses, times the sensor gain (a darker scene or a shorter
+  // exposure gives less signal against the same noise). Both factors are 1 by default: exact.
+  const float exposure_scale = settings.gain / static_cast<float>(std::max<std::size_t>(exposure_poses.size(), 1));
+  for (float& v : irradiance) v *= exposure_scale;
 
   // Separable PSF, border pixels replicated: every output still depends only on its coordinates.
   std::vector<float> blurred_x(irradiance.size(), 0.0f);

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "voca/core/image.h"
@@ -55,6 +56,9 @@ struct RenderSettings {
   // box-filtered edges reach the sampling limit, where any sub-pixel interpolation (KLT's bilinear
   // one included) is biased. 0 (the default for now) keeps renders byte-identical to before.
   float psf_sigma_px = 0.0f;
+  // Sensor gain on the irradiance, before noise: < 1 renders a dark, low-contrast scene (less signal
+  // against the same noise), as dim light or a short exposure does.
+  float gain = 1.0f;
 };
 
 // Renders rows [y_begin, y_end) of a camera at pose T_world_cam into out (same size as the ray
@@ -62,6 +66,11 @@ struct RenderSettings {
 // splitting an image into row ranges (across threads, say) gives the same bytes as one call.
 void renderRows(const Scene& scene, const RayTable& rays, const SE3d& T_world_cam, const RenderSettings& settings,
                 ImageView<std::uint8_t> out, int y_begin, int y_end);
+
+// The same with motion blur: the irradiance is averaged over the camera poses sampled while the
+// shutter is open (in time order, equally spaced), then blurred by the PSF and given noise once.
+void renderRows(const Scene& scene, const RayTable& rays, std::span<const SE3d> exposure_poses,
+                const RenderSettings& settings, ImageView<std::uint8_t> out, int y_begin, int y_end);
 
 // Distance along each pixel's centre ray to the first surface (0 where there is no valid ray);
 // for tests and image-motion measurements.
