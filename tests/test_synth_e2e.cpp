@@ -98,6 +98,16 @@ TEST_CASE("voca synth writes a EuRoC folder with ground truth and calibration th
     }
     // Re-centred: the camera ends up in the room (the default room is centred on the origin).
     CHECK(result.poses.front().T_world_body.translation().head<2>().norm() < 5.0);
+
+    // --start skips into the file: 0.2 s later, 11 frames left, the first at the file's fifth pose.
+    const fs::path later = scratch / "later";
+    REQUIRE(runVoca("synth --out " + later.string() + " --trajectory " + file.string() + " --rate 40 --start 0.2") ==
+            0);
+    const voca::Trajectory skipped = voca::loadTrajectory(later / "mav0" / "state_groundtruth_estimate0" / "data.csv");
+    REQUIRE(skipped.poses.size() == 11);
+    CHECK(skipped.poses.front().t_ns == shifted.poses[4].t_ns);
+    CHECK(runVoca("synth --out " + (scratch / "late").string() + " --trajectory " + file.string() + " --start 9") ==
+          1 << 8);
   }
 }
 
@@ -172,6 +182,7 @@ TEST_CASE("voca synth rejects bad options with a clear error") {
   CHECK(runVoca("synth --out " + (scratch / "f").string() + " --exposure -1") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "g").string() + " --exposure 60") == 1 << 8);  // > one 50 ms period
   CHECK(runVoca("synth --out " + (scratch / "h").string() + " --gain 0") == 1 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "i").string() + " --start 2") == 1 << 8);  // needs --trajectory
   // Two sources of motion at once is a usage error (CLI11's own exit code), not a silent choice.
   CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") != 0);
 }

@@ -34,6 +34,7 @@ struct SynthOptions {
   fs::path trajectory;
   std::string motion = "gentle";
   std::optional<double> seconds;
+  double start_s = 0.0;  // skip this much of a trajectory file (take-off, standing still)
   double rate_hz = 20.0;
   std::uint64_t seed = 1;
   std::uint32_t scene_seed = 7;
@@ -115,8 +116,13 @@ Sequence fileSequence(const SynthOptions& options, const voca::StereoRig& rig) {
                            ": KITTI poses without times; give a trajectory with timestamps (TUM or EuRoC csv)");
   }
   Sequence seq;
-  const int64_t t0 = trajectory.poses.front().t_ns;
+  const int64_t t0 = trajectory.poses.front().t_ns + static_cast<int64_t>(std::llround(options.start_s * 1e9));
   const int64_t t1 = trajectory.poses.back().t_ns;
+  if (t0 >= t1) {
+    throw voca::InputError(fmt::format("--start {} s: beyond the end of {} ({:.1f} s long)", options.start_s,
+                                       options.trajectory.string(),
+                                       static_cast<double>(t1 - trajectory.poses.front().t_ns) * 1e-9));
+  }
   const double period_ns = 1e9 / options.rate_hz;
   const int64_t limit = options.seconds ? static_cast<int64_t>(std::llround(*options.seconds * options.rate_hz)) : -1;
   for (int64_t k = 0;; ++k) {
@@ -182,6 +188,10 @@ int runSynth(const SynthOptions& options) {
     throw voca::InputError("--exposure: expected 0 ms up to one frame period");
   }
   if (!(options.gain > 0.0 && options.gain <= 4.0)) throw voca::InputError("--gain: expected 0 < gain <= 4");
+  if (!(options.start_s >= 0.0)) throw voca::InputError("--start: expected >= 0 s");
+  if (options.start_s > 0.0 && options.trajectory.empty()) {
+    throw voca::InputError("--start: only with --trajectory (presets start at their beginning)");
+  }
 
   const auto start = std::chrono::steady_clock::now();
   const voca::StereoRig rig = loadRig(options.camera);
@@ -313,6 +323,9 @@ const bool registered = voca::cli::registerCommand(
            ->capture_default_str()
            ->excludes(trajectory);
        app.add_option("--seconds", options->seconds, "Duration (default: 20 s for presets, the whole trajectory file)");
+       app.add_option("--start", options->start_s,
+                      "With --trajectory: skip this many seconds of it first (e.g. a take-off or a standstill)")
+           ->capture_default_str();
        app.add_option("--rate", options->rate_hz, "Frame rate, Hz")->capture_default_str();
        app.add_option("--seed", options->seed, "Seed of the sensor noise")->capture_default_str();
        app.add_option("--scene-seed", options->scene_seed, "Seed of the room's layout and textures")
