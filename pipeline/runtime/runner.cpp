@@ -277,7 +277,13 @@ struct Pipeline::Impl final : StageContext {
       }
       slot->sequence = sequence++;
       ++report.produced;
-      if (slot->arrival_ns == 0) slot->arrival_ns = platform::monotonicNs();
+      if (slot->arrival_ns == 0) {
+        slot->arrival_ns = platform::monotonicNs();
+      } else {
+        // A paced source waited for the frame's due time: that wait is the recording's rate, not
+        // work, so the source's service time starts when the frame became available.
+        t.start_ns = std::max(t.start_ns, slot->arrival_ns);
+      }
       afterStage(0, *slot);
     }
     source_finished.store(true, std::memory_order_release);
