@@ -254,7 +254,13 @@ TEST_CASE("pipeline e2e: SIGINT and SIGTERM stop voca run cleanly; a second sign
   const pid_t pid =
       spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " + (dir / "twice.txt").string(),
                 tmp, dir / "twice.log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Signal only once the handlers are in place (they are installed before --encode makes its
+  // temporary folder); a fixed delay raced the process start on a loaded machine.
+  const auto started_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (fs::is_empty(tmp) && std::chrono::steady_clock::now() < started_deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  REQUIRE_FALSE(fs::is_empty(tmp));
   kill(pid, SIGINT);
   kill(pid, SIGINT);
   int status = 0;
