@@ -1,0 +1,75 @@
+#pragma once
+// Live stereo cameras as a StereoSource (raw, live): two V4L2 devices paired by timestamp, or one
+// side-by-side stereo device split into its left and right halves. Frames are converted to gray
+// straight from the kernel's buffers into the caller's images (the pipeline's preallocated slots),
+// so capture allocates nothing per frame.
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "drivers/capture/v4l2_camera.h"
+#include "drivers/capture/v4l2_io.h"
+#include "drivers/source/stereo_source.h"
+
+namespace voca::capture {
+
+struct StereoCameraOptions {
+  std::vector<std::string> devices;    // two (left, right), or one side-by-side stereo device
+  CameraRequest request;               // for each device (side-by-side: the full width)
+  std::int64_t pair_tolerance_ns = 0;  // 0: defaultPairTolerance() of the cameras' rate
+  int frame_timeout_ms = 3000;         // no frame for this long is a failure (a stalled camera)
+  std::int64_t max_frames = 0;         // stereo frames to deliver before next() returns false; 0: until stopped
+};
+
+// Parses "640x480" (--size). InputError naming the option otherwise.
+void parseFrameSize(std::string_view text, int& width, int& height);
+
+// Parses a device list: "/dev/video0,/dev/video2" or "/dev/video0". InputError for empty entries
+// or more than two devices.
+std::vector<std::string> parseDeviceList(std::string_view text);
+
+class CameraStereoSource : public StereoSource {
+ public:
+  // Opens the devices (nothing streams until the first next()). Throws InputError for a missing
+  // device (naming those available), a format problem, two cameras of different sizes, or a
+  // side-by-side device of odd width.
+  explicit CameraStereoSource(const StereoCameraOptions& options, V4l2Io& io = systemV4l2Io());
+  ~CameraStereoSource() override;
+
+  const SourceInfo& info() const override { return info_; }
+  // Waits for the next stereo pair. Throws RuntimeFailure when a device disappears, fails or
+  // stalls for frame_timeout_ms; false after interrupt().
+  bool next(RawStereoFrame& frame) override;
+  void interrupt() override { interrupted_ = true; }
+  SourceCounters counters() const override;
+
+  // Problems that did not stop the capture (from the devices), for the user.
+  std::vector<std::string> warnings() const;
+  std::int64_t pairToleranceNs() const { return tolerance_ns_; }
+
+ private:
+  bool fillPending(int timeout_ms);
+
+  StereoCameraOptions options_;
+  V4l2Io& io_;
+  std::vector<std::unique_ptr<V4l2Camera>> cameras_;
+  bool side_by_side_ = false;
+  SourceInfo info_;
+  std::int64_t tolerance_ns_ = 0;
+  std::array<CapturedBuffer, 2> pending_{};
+  std::array<bool, 2> has_pending_{};
+  bool started_ = false;
+  bool have_first_sequence_ = false;
+  std::uint32_t first_sequence_ = 0;
+  std::int64_t delivered_ = 0;
+  std::atomic<bool> interrupted_{false};
+  std::atomic<std::int64_t> unpaired_{0};
+  std::atomic<std::int64_t> frames_lost_{0};
+};
+
+}  // namespace voca::capture

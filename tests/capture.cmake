@@ -1,0 +1,10 @@
+# V4L2 capture against an in-process fake device that speaks the kernel protocol: discovery, every
+# pixel format, side-by-side split, stereo pairing, controls, a device vanishing mid-stream.
+add_library(voca_test_fake_v4l2 STATIC fake_v4l2.cpp)
+target_link_libraries(voca_test_fake_v4l2 PUBLIC voca_drivers_capture voca_platform_realtime)
+target_include_directories(voca_test_fake_v4l2 PUBLIC ${PROJECT_SOURCE_DIR})
+voca_target_defaults(voca_test_fake_v4l2)
+voca_add_test(test_capture SOURCES test_capture.cpp LIBS voca_test_fake_v4l2 voca_drivers_capture fmt::fmt
+              LABELS asan)
+# Counts operator new (own executable): capture allocates nothing per frame once streaming.
+voca_add_test(test_capture_alloc SOURCES test_capture_alloc.cpp LIBS voca_test_fake_v4l2 voca_drivers_capture)
