@@ -326,10 +326,10 @@ const AVCodecContext* VideoEncoder::codecContext() const { return impl_->ctx.get
 namespace {
 
 // Writes the packets of one video stream into an .mp4 file.
-class Mp4Writer {
+class Mp4Muxer {
  public:
   // Opens the file first so an unwritable path fails before any encoding work.
-  explicit Mp4Writer(const std::filesystem::path& path) : path_(path) {
+  explicit Mp4Muxer(const std::filesystem::path& path) : path_(path) {
     if (const int r = avformat_alloc_output_context2(&format_, nullptr, "mp4", path.c_str()); r < 0 || !format_) {
       throw RuntimeFailure(fmt::format("cannot create an mp4 muxer: {}", avError(r)));
     }
@@ -339,14 +339,14 @@ class Mp4Writer {
       throw InputError(fmt::format("cannot write {}: {}", path.string(), avError(r)));
     }
   }
-  ~Mp4Writer() {
+  ~Mp4Muxer() {
     if (format_ != nullptr) {
       if (format_->pb != nullptr) avio_closep(&format_->pb);
       avformat_free_context(format_);
     }
   }
-  Mp4Writer(const Mp4Writer&) = delete;
-  Mp4Writer& operator=(const Mp4Writer&) = delete;
+  Mp4Muxer(const Mp4Muxer&) = delete;
+  Mp4Muxer& operator=(const Mp4Muxer&) = delete;
 
   void begin(const AVCodecContext& ctx) {
     stream_ = avformat_new_stream(format_, nullptr);
@@ -420,6 +420,63 @@ class RemoveOnFailure {
 
 }  // namespace
 
+EncoderSettings liveEncoderSettings(const LiveEncodeOptions& options) {
+  if (options.encoder != "x264") {
+    throw InputError(fmt::format("encoder \"{}\": expected x264", options.encoder));
+  }
+  if (!(options.fps > 0.0) || options.fps > 1000.0) {
+    throw InputError(fmt::format("frame rate {} fps: expected 0 < fps <= 1000", options.fps));
+  }
+  EncoderSettings settings;
+  settings.codec = "libx264";
+  settings.bitrate_bps = options.bitrate_bps;
+  const long millihertz = std::lround(options.fps * 1000.0);
+  if (millihertz % 1000 == 0) {
+    settings.fps_num = static_cast<int>(millihertz / 1000);
+    settings.fps_den = 1;
+  } else {
+    settings.fps_num = static_cast<int>(millihertz);
+    settings.fps_den = 1000;
+  }
+  settings.two_pass = false;
+  // veryfast keeps two 640x480 streams at 30 fps within a Raspberry Pi 5's cores; zerolatency turns
+  // off look-ahead, frame threads and B-frames, so each frame's packet comes out with the frame.
+  settings.x264_preset = "veryfast";
+  settings.x264_tune = "zerolatency";
+  // Causal and decodable frame by frame as the paper's stream: no B-frames, one reference; a keyframe
+  // every 10 s bounds how long a lost packet hurts; a VBV cap of one second holds the bitrate.
+  const long kbps = static_cast<long>(options.bitrate_bps / 1000);
+  settings.x264_params =
+      fmt::format("bframes=0:ref=1:keyint={}:rc-lookahead=0:sync-lookahead=0:vbv-maxrate={}:vbv-bufsize={}",
+                  std::max(1L, std::lround(options.fps * 10.0)), kbps, kbps);
+  settings.threads = 1;
+  settings.global_header = true;  // .mp4 keeps SPS/PPS in the sample description
+  return settings;
+}
+
+struct Mp4Writer::Impl {
+  explicit Impl(const std::filesystem::path& path) : muxer(path) {}
+  Mp4Muxer muxer;
+  bool begun = false, ended = false;
+};
+
+Mp4Writer::Mp4Writer(const std::filesystem::path& path) : impl_(std::make_unique<Impl>(path)) {}
+Mp4Writer::~Mp4Writer() = default;
+
+void Mp4Writer::begin(const VideoEncoder& encoder) {
+  if (encoder.codecContext() == nullptr) throw std::logic_error("Mp4Writer::begin: the encoder is not open");
+  impl_->muxer.begin(*encoder.codecContext());
+  impl_->begun = true;
+}
+
+void Mp4Writer::write(const EncodedPacket& packet) { impl_->muxer.write(packet); }
+
+void Mp4Writer::end() {
+  if (!impl_->begun || impl_->ended) return;
+  impl_->ended = true;
+  impl_->muxer.end();
+}
+
 EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSettings& settings,
                              const FrameSource& source, const EncodeProgress& progress) {
   using Clock = std::chrono::steady_clock;
@@ -434,7 +491,7 @@ EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSet
     stats_file = temp->path() / "pass1.log";
   }
 
-  Mp4Writer writer(path);
+  Mp4Muxer writer(path);
   RemoveOnFailure cleanup(path);
   EncodeResult result;
   int first_pass_frames = -1;

@@ -98,6 +98,38 @@ class VideoEncoder {
   std::unique_ptr<Impl> impl_;
 };
 
+// Writes one encoder's packets into an .mp4 file as they come (live recording). The file is complete
+// and playable after end().
+class Mp4Writer {
+ public:
+  // Opens the file, so an unwritable path fails before any encoding (InputError).
+  explicit Mp4Writer(const std::filesystem::path& path);
+  ~Mp4Writer();
+  Mp4Writer(const Mp4Writer&) = delete;
+  Mp4Writer& operator=(const Mp4Writer&) = delete;
+
+  // Takes the stream parameters (size, rate, codec headers) from an open encoder opened with
+  // global_header = true, and writes the file header.
+  void begin(const VideoEncoder& encoder);
+  void write(const EncodedPacket& packet);
+  // Writes the index (moov) and closes the file; idempotent. Throws RuntimeFailure on write errors.
+  void end();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The encoder settings for live capture (`voca record`): one pass, no B-frames, one reference frame,
+// no look-ahead (x264's zerolatency tune), a long GOP and a bitrate cap, so every packet leaves the
+// encoder with the frame that made it. The one place that chooses how live video is encoded.
+struct LiveEncodeOptions {
+  std::string encoder = "x264";  // libx264 (software, everywhere)
+  std::int64_t bitrate_bps = 2'000'000;
+  double fps = 30.0;  // the container's nominal rate; frame times come from the capture timestamps
+};
+EncoderSettings liveEncoderSettings(const LiveEncodeOptions& options);
+
 // Called for each frame given to encodeVideoFile: pass (1-based), number of passes, frame index.
 using EncodeProgress = std::function<void(int pass, int num_passes, int frame_index)>;
 // Supplies the whole sequence, in order, by calling emit once per frame. It is called once per

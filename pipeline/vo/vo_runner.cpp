@@ -54,10 +54,10 @@ class ProgressSink final : public FrameSink {
       return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
     };
     if (estimate_) {
-      fmt::print(stderr, "\rframe {}/{}: {} landmarks, {} keyframes in the window, {:.1f} + {:.1f} ms   ", frames_,
-                 total_, slot.pose.num_landmarks, slot.pose.num_keyframes, ms(frontend_stage_), ms(backend_stage_));
+      fmt::print(stderr, "\rframe {}: {} landmarks, {} keyframes in the window, {:.1f} + {:.1f} ms   ", count(),
+                 slot.pose.num_landmarks, slot.pose.num_keyframes, ms(frontend_stage_), ms(backend_stage_));
     } else {
-      fmt::print(stderr, "\rtracked {}/{} frames   ", frames_, total_);
+      fmt::print(stderr, "\rtracked {} frames   ", count());
     }
     printed_ = true;
   }
@@ -66,6 +66,9 @@ class ProgressSink final : public FrameSink {
   }
 
  private:
+  // "12/300", or "12" for live input of unknown length.
+  std::string count() const { return total_ > 0 ? fmt::format("{}/{}", frames_, total_) : fmt::format("{}", frames_); }
+
   std::int64_t total_;
   bool estimate_;
   int frontend_stage_, backend_stage_;
@@ -256,6 +259,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   Pipeline pipeline(source_stage, chain, pipeline_options);
   result.pipeline = pipeline.run();
   if (result.pipeline.stopped) result.stop_signal = platform::stopSignal();
+  result.source = source.counters();
 
   result.frames = statistics.frames();
   result.frontend = statistics.frontend();
@@ -327,6 +331,10 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
       fmt::print(out, " {}{}", f.frame_index, f.reason == ReleaseReason::kDamaged ? "(damaged)" : "");
     }
     fmt::print(out, "\n");
+  }
+  if (r.source.frames_lost > 0 || r.source.unpaired > 0) {
+    fmt::print(out, "source: {} frames lost before capture (driver or network), {} unpaired stereo frames\n",
+               r.source.frames_lost, r.source.unpaired);
   }
   if (r.eval) {
     fmt::print(out, "ground truth: {} ({} poses associated)\n", r.ground_truth, r.eval->ate.stats.count);
@@ -464,6 +472,8 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"wall_s", p.wall_s},
                    {"frames_per_s", p.wall_s > 0 ? static_cast<double>(p.completed) / p.wall_s : 0.0},
                    {"produced", p.produced},
+                   {"source_frames_lost", r.source.frames_lost},
+                   {"source_unpaired", r.source.unpaired},
                    {"completed", p.completed},
                    {"dropped", p.dropped},
                    {"damaged", p.damaged},

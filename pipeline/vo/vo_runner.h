@@ -69,7 +69,8 @@ struct VoRunResult {
   RunReport pipeline;              // per-stage latency, queues, drops, damaged frames, error
   std::optional<EvalReport> eval;  // when there is ground truth
   std::string ground_truth;
-  int stop_signal = 0;  // the signal that stopped the run early (0: none)
+  SourceCounters source;  // frames the live source lost or could not pair
+  int stop_signal = 0;    // the signal that stopped the run early (0: none)
   std::vector<std::string> warnings;
 };
 

@@ -1,0 +1,60 @@
+#include "tools/voca/camera_cli.h"
+
+#include <fmt/core.h>
+
+#include <cmath>
+
+#include "drivers/capture/pixel_format.h"
+#include "voca/core/error.h"
+
+namespace voca::cli {
+
+void addCameraOptions(CLI::App& app, CameraCli& cli) {
+  app.add_option("--camera", cli.devices,
+                 "Cameras: LEFT,RIGHT V4L2 devices (e.g. /dev/video0,/dev/video2) or libcamera cameras "
+                 "(libcamera:0,libcamera:1), or one side-by-side stereo camera (split into left and right halves); "
+                 "`voca devices` lists them")
+      ->required();
+  app.add_option("--size", cli.size, "Capture size WIDTHxHEIGHT per device (default: the device's current size)");
+  app.add_option("--pixel-format", cli.pixel_format,
+                 "GREY, Y10, Y16, YUYV or NV12 (default: the first of these the device offers)");
+  app.add_option("--fps", cli.fps, "Frame rate to ask the devices for (default: their current rate)");
+  app.add_option("--exposure", cli.exposure,
+                 "Manual exposure in the device's units (UVC: 100 us steps; libcamera: microseconds); turns "
+                 "automatic exposure off");
+  app.add_option("--gain", cli.gain, "Manual gain in the device's units; turns automatic gain off");
+  app.add_option("--pair-tolerance", cli.pair_tolerance_ms,
+                 "Two devices: most milliseconds between a stereo pair's timestamps (default: just under half a "
+                 "frame interval)");
+  app.add_option("--buffers", cli.buffers, "Kernel capture buffers per device")->capture_default_str();
+  app.add_option("--frames", cli.frames, "Stop after N stereo frames (0 = until Ctrl-C)")->capture_default_str();
+}
+
+capture::StereoCameraOptions applyCameraOptions(const CameraCli& cli) {
+  capture::StereoCameraOptions options;
+  options.devices = capture::parseDeviceList(cli.devices);
+  if (!cli.size.empty()) capture::parseFrameSize(cli.size, options.request.width, options.request.height);
+  if (!cli.pixel_format.empty()) options.request.fourcc = capture::parseGrayConvertibleFormat(cli.pixel_format);
+  if (cli.fps < 0.0 || !std::isfinite(cli.fps))
+    throw InputError(fmt::format("--fps: expected a positive rate, got {}", cli.fps));
+  options.request.rate_hz = cli.fps;
+  if (cli.exposure >= 0) options.request.controls.exposure = cli.exposure;
+  if (cli.gain >= 0) options.request.controls.gain = cli.gain;
+  if (cli.pair_tolerance_ms < 0.0) throw InputError("--pair-tolerance: expected a positive number of milliseconds");
+  options.pair_tolerance_ns = static_cast<std::int64_t>(std::llround(cli.pair_tolerance_ms * 1e6));
+  if (cli.buffers < 2 || cli.buffers > 32)
+    throw InputError(fmt::format("--buffers: expected 2 to 32, got {}", cli.buffers));
+  options.request.buffers = cli.buffers;
+  if (cli.frames < 0) throw InputError("--frames: expected 0 (until stopped) or a positive count");
+  options.max_frames = cli.frames;
+  return options;
+}
+
+std::string cameraHelpFooter() {
+  return "Cameras: any V4L2 capture device (UVC webcams, sensor drivers); formats are converted to 8-bit gray.\n"
+         "Two devices are paired by their kernel timestamps (CLOCK_MONOTONIC): a frame without a partner within\n"
+         "the tolerance is counted as unpaired and skipped; frames the driver dropped are counted as lost.\n"
+         "On a Raspberry Pi 5 the camera modules are behind libcamera: `voca devices` lists them.";
+}
+
+}  // namespace voca::cli
