@@ -15,3 +15,7 @@ voca_add_test(test_capture_pipeline SOURCES test_capture_pipeline.cpp
 voca_add_test(test_capture_record SOURCES test_capture_record.cpp
               LIBS voca_test_fake_v4l2 voca_pipeline_vo voca_drivers_source voca_drivers_dataset voca_drivers_decode
               voca_calib voca_platform_filesystem TIMEOUT 120)
+# libcamera without a camera: the manager starts, lists cameras, names missing ones.
+if(VOCA_WITH_LIBCAMERA)
+  voca_add_test(test_capture_libcamera SOURCES test_capture_libcamera.cpp LIBS voca_drivers_capture)
+endif()
