@@ -7,9 +7,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <random>
 #include <string>
+
+#include <sys/wait.h>
 
 #include "voca/core/error.h"
 
@@ -34,8 +37,12 @@ inline bool runningInCi() {
 // A file or folder under ../shared/data, or nullopt when the shared data is not beside the
 // checkout (the project must build and pass without it): the caller returns early and the
 // executable reports itself skipped. In CI a missing file fails the test instead.
+// VOCA_SHARED_DATA in the environment replaces the folder found at configure time.
 inline std::optional<std::filesystem::path> sharedData(const std::string& relative) {
-  const std::filesystem::path path = std::filesystem::path(VOCA_SHARED_DATA_DIR) / relative;
+  const char* override_dir = std::getenv("VOCA_SHARED_DATA");
+  const std::filesystem::path root =
+      override_dir != nullptr && *override_dir != '\0' ? override_dir : VOCA_SHARED_DATA_DIR;
+  const std::filesystem::path path = root / relative;
   if (!std::filesystem::exists(path)) {
     if (runningInCi()) FAIL("shared data missing in CI (CI=true): " << path.string());
     MESSAGE("SKIPPED: shared data not found at " << path.string());
@@ -50,6 +57,31 @@ inline std::optional<std::filesystem::path> sharedData(const std::string& relati
 inline int runVoca(const std::string& args) {
   const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " >/dev/null 2>&1";
   return std::system(command.c_str());
+}
+
+// What a command printed (stdout and stderr together) and its exit code.
+struct CommandOutput {
+  int exit_code = -1;
+  std::string text;
+};
+
+// Runs the built `voca` binary with the given arguments and returns its exit code (not shifted)
+// and everything it printed, so a test can check what a user would read.
+inline CommandOutput runVocaOutput(const std::string& args) {
+  std::random_device seed;
+  const std::filesystem::path log =
+      std::filesystem::path(VOCA_BINARY_DIR) / "test-scratch" / ("voca-output-" + std::to_string(seed()) + ".log");
+  std::filesystem::create_directories(log.parent_path());
+  const std::string command = std::string(VOCA_BINARY_DIR) + "/bin/voca " + args + " >" + log.string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  CommandOutput result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(log, std::ios::binary);
+  result.text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  in.close();
+  std::error_code ignored;
+  std::filesystem::remove(log, ignored);
+  return result;
 }
 
 // A fresh folder under the build tree, removed when the test ends.
