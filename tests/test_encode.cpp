@@ -4,6 +4,8 @@
 #include <fstream>
 #include <iterator>
 #include <numeric>
+#include <tuple>
+#include <vector>
 
 #include "drivers/encode/video_encoder.h"
 #include "tests/test_encode_probe.h"
@@ -134,21 +136,40 @@ TEST_CASE("frame rate is selectable and becomes the stream rate") {
   CHECK(probe.duration_s == doctest::Approx(1.0).epsilon(1e-6));
 }
 
-TEST_CASE("odd frame sizes are coded as their even top-left crop") {
-  const std::vector<GrayImage> frames = makeSequence(161, 121, 5);
-  test::ScratchDir dir("encode-odd");
-  EncoderSettings settings = test::testSettings();
-  settings.two_pass = false;
-  settings.bitrate_bps = 2000000;
-  const EncodeResult result = encodeVideoFile(dir / "odd.mp4", settings, sourceOf(frames));
-  CHECK(result.width == 160);
-  CHECK(result.height == 120);
-  const test::VideoProbe probe = test::probeVideo(dir / "odd.mp4", true);
-  CHECK(probe.width == 160);
-  CHECK(probe.height == 120);
-  REQUIRE(!probe.luma.empty());
-  // The crop keeps pixel (x, y) at (x, y): the decoded frame matches the input's top-left part.
-  CHECK(psnr(probe.luma[0], frames[0], 160, 120) > 30.0);
+TEST_CASE("odd frame sizes are coded whole: decoders return the original size, last column and row included") {
+  // KITTI 00-02 are 1241x376. H.264 signals the size through the SPS crop window; libx264 codes an
+  // odd size as 4:0:0, whose crop unit is one pixel. MPEG-4/MPEG-2 store the size as it is.
+  for (const auto& [codec, width, height] :
+       {std::tuple{"libx264", 161, 121}, std::tuple{"libx264", 161, 120}, std::tuple{"libx264", 160, 121},
+        std::tuple{"mpeg4", 161, 121}, std::tuple{"mpeg2video", 161, 121}}) {
+    CAPTURE(codec);
+    CAPTURE(width);
+    CAPTURE(height);
+    const std::vector<GrayImage> frames = makeSequence(width, height, 5);
+    test::ScratchDir dir("encode-odd");
+    EncoderSettings settings = test::testSettings();
+    settings.codec = codec;
+    settings.two_pass = false;
+    settings.bitrate_bps = 2000000;
+    const EncodeResult result = encodeVideoFile(dir / "odd.mp4", settings, sourceOf(frames));
+    CHECK(result.width == width);
+    CHECK(result.height == height);
+    const test::VideoProbe probe = test::probeVideo(dir / "odd.mp4", true);
+    CHECK(probe.width == width);
+    CHECK(probe.height == height);
+    REQUIRE(probe.luma.size() == frames.size());
+    CHECK(probe.luma[0].width() == width);
+    CHECK(probe.luma[0].height() == height);
+    // Pixel (x, y) stays at (x, y), and the odd last column and row carry the image, not padding.
+    CHECK(psnr(probe.luma[0], frames[0], width, height) > 30.0);
+    const auto lastColumnError = [&](const GrayImage& decoded, const GrayImage& input) {
+      double sum = 0.0;
+      for (int y = 0; y < height; ++y)
+        sum += std::abs(static_cast<double>(decoded(width - 1, y)) - input(width - 1, y));
+      return sum / height;
+    };
+    CHECK(lastColumnError(probe.luma[0], frames[0]) < 8.0);
+  }
 }
 
 TEST_CASE("mpeg4 and mpeg2video go through the same function and honour the bitrate") {

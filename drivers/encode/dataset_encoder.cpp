@@ -249,14 +249,11 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
   }
 
   if (rig) {
-    // Odd image sizes are coded as their even crop: the intrinsics stay valid, the size shrinks.
+    // Every size is coded as it is (odd ones included), so the calibration carries over unchanged.
     for (const CameraEncodeReport& cam : report.cameras) {
       if (cam.camera >= static_cast<int>(rig->cameras.size())) continue;
-      CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
-      if ((calib.width & ~1) == cam.result.width && (calib.height & ~1) == cam.result.height) {
-        calib.width = cam.result.width;
-        calib.height = cam.result.height;
-      } else {
+      const CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
+      if (calib.width != cam.result.width || calib.height != cam.result.height) {
         report.warnings.push_back(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}",
                                               cam.camera, calib.width, calib.height, cam.result.width,
                                               cam.result.height));

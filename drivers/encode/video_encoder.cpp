@@ -167,9 +167,15 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   if (settings.fps_num <= 0 || settings.fps_den <= 0) {
     throw InputError(fmt::format("frame rate {}/{}: must be positive", settings.fps_num, settings.fps_den));
   }
-  // 4:2:0 chroma needs even sizes: code the even top-left crop so pixel coordinates stay valid.
-  const int coded_width = width & ~1;
-  const int coded_height = height & ~1;
+  // Every pixel is coded, odd sizes included. H.264 codes whole 16x16 macroblocks and signals the
+  // picture size through the SPS crop window, whose unit is one pixel only without chroma (4:0:0)
+  // and two pixels in 4:2:0. So libx264 codes an odd-sized frame as 4:0:0 (monochrome, High
+  // profile): x264 pads to the macroblock grid by repeating the last column and row, and every
+  // decoder crops back to exactly width x height. Even sizes stay 4:2:0 with neutral chroma, as
+  // the paper encoded. MPEG-4 Part 2 and MPEG-2 store the size itself and take odd sizes in 4:2:0.
+  const int coded_width = width;
+  const int coded_height = height;
+  const bool odd_size = (width % 2) != 0 || (height % 2) != 0;
   if (coded_width < 16 || coded_height < 16) {
     throw InputError(fmt::format("frame size {}x{}: the encoder needs at least 16x16 pixels", width, height));
   }
@@ -200,7 +206,7 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   if (!ctx) throw RuntimeFailure("out of memory allocating the encoder");
   ctx->width = coded_width;
   ctx->height = coded_height;
-  ctx->pix_fmt = AV_PIX_FMT_YUV420P;
+  ctx->pix_fmt = settings.codec == "libx264" && odd_size ? AV_PIX_FMT_GRAY8 : AV_PIX_FMT_YUV420P;
   // Gray images use the full 0..255 range; signalling it keeps the luma values as they are instead
   // of squeezing them into studio range 16..235 as a swscale conversion would.
   ctx->color_range = AVCOL_RANGE_JPEG;
@@ -255,10 +261,12 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   if (const int r = av_frame_get_buffer(frame.get(), 0); r < 0) {
     throw RuntimeFailure(fmt::format("cannot allocate a {}x{} frame: {}", coded_width, coded_height, avError(r)));
   }
-  for (int plane = 1; plane < 3; ++plane) {
-    for (int y = 0; y < coded_height / 2; ++y) {
-      std::memset(frame->data[plane] + static_cast<std::ptrdiff_t>(y) * frame->linesize[plane], 128,
-                  static_cast<std::size_t>(coded_width / 2));
+  if (frame->format == AV_PIX_FMT_YUV420P) {
+    for (int plane = 1; plane < 3; ++plane) {
+      for (int y = 0; y < (coded_height + 1) / 2; ++y) {
+        std::memset(frame->data[plane] + static_cast<std::ptrdiff_t>(y) * frame->linesize[plane], 128,
+                    static_cast<std::size_t>((coded_width + 1) / 2));
+      }
     }
   }
 

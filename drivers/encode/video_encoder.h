@@ -60,9 +60,9 @@ enum class EncoderPass { kSingle, kFirst, kSecond };
 
 // A frame-by-frame encoder for 8-bit gray frames. The luma plane carries the gray values
 // unchanged (full range, signalled in the stream) and chroma is a constant 128, so a decoder's
-// Y plane returns the original intensities up to compression loss. Odd widths/heights cannot be
-// coded in 4:2:0; the encoder codes the largest even top-left crop (pixel coordinates unchanged)
-// and reports it in width()/height(). Packet buffers are reused between calls.
+// Y plane returns the original intensities up to compression loss. Every size from 16x16 up is
+// coded exactly, odd ones included (libx264 then codes 4:0:0, whose crop window has one-pixel
+// units, so decoders return the original size). Packet buffers are reused between calls.
 class VideoEncoder {
  public:
   VideoEncoder();
@@ -87,7 +87,7 @@ class VideoEncoder {
   std::span<const EncodedPacket> flush();
 
   bool isOpen() const;
-  int width() const;  // coded size (even)
+  int width() const;  // coded size = the frames' size
   int height() const;
   const EncoderSettings& settings() const;
   // For muxers: the codec context (codec parameters, global headers). Null before open().
