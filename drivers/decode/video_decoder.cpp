@@ -90,6 +90,7 @@ struct VideoDecoder::Impl {
   std::size_t queue_head = 0, queue_size = 0;
   std::int64_t frames_out = 0;
   std::int64_t last_packet = -1;
+  bool format_checked = false;
 
   CodecPtr allocContext(const AVCodec* codec) const;
   CodecPtr openSoftware(bool motion_only) const;
@@ -100,7 +101,57 @@ struct VideoDecoder::Impl {
   void drainMotion();
   void fail(int rc, const std::string& what) const;
   void convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out);
+  void refuseUnusableStructure(const AVFrame& parsed);
 };
+
+// The method needs a causal, progressive, single-reference stream of 8-bit 4:2:0 (or 4:0:0)
+// pictures; anything else is refused by name rather than giving wrong priors silently:
+//  - B-frames: output order differs from decode order and half the vectors point forward;
+//  - more than one reference frame: AVMotionVector::source says only "past", not which past
+//    frame, so a vector to frame t-2 would be read as one-frame motion;
+//  - interlaced or field pictures: a vector spans a field, half a frame's rows;
+//  - other bit depths or chroma layouts: the pixel path copies an 8-bit luma plane.
+// `parsed` is the software parse of the picture (the same frame for software decoding).
+void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
+  const AVCodecContext& ctx = motion ? *motion : *pixel;
+  if (parsed.pict_type == AV_PICTURE_TYPE_B) {
+    throw InputError(source + ": frame " + std::to_string(frames_out) +
+                     " is a B-frame; VOCA needs a causal stream without B-frames (x264: bframes=0)");
+  }
+  if (parsed.interlaced_frame != 0) {
+    throw InputError(source + ": frame " + std::to_string(frames_out) +
+                     " is interlaced (field or MBAFF coding); VOCA needs progressive frames");
+  }
+  if (format_checked) return;
+  format_checked = true;
+  if (stream.codec == VideoCodec::kH264) {
+    if (ctx.has_b_frames > 0) {
+      throw InputError(source + ": the stream reorders frames (B-frames, reorder depth " +
+                       std::to_string(ctx.has_b_frames) + "); VOCA needs a causal stream (x264: bframes=0)");
+    }
+    if (ctx.refs > 1) {
+      throw InputError(source + ": the stream uses up to " + std::to_string(ctx.refs) +
+                       " reference frames; VOCA needs one (x264: ref=1), since a motion vector does not say "
+                       "which past frame it points to");
+    }
+  }
+  AVPixelFormat format = static_cast<AVPixelFormat>(parsed.format);
+  const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(format);
+  if (desc != nullptr && (desc->flags & AV_PIX_FMT_FLAG_HWACCEL) != 0) desc = av_pix_fmt_desc_get(ctx.sw_pix_fmt);
+  if (desc == nullptr) return;  // a hardware wrapper that does not say; its pixels are checked in convert()
+  const bool eight_bit = desc->comp[0].depth == 8;
+  const bool gray = desc->nb_components == 1;
+  const bool chroma_420 = desc->nb_components >= 3 && desc->log2_chroma_w == 1 && desc->log2_chroma_h == 1;
+  if ((desc->flags & (AV_PIX_FMT_FLAG_RGB | AV_PIX_FMT_FLAG_PAL)) != 0 || !eight_bit || !(gray || chroma_420)) {
+    const char* layout = gray                                                   ? "4:0:0"
+                         : desc->log2_chroma_w == 1 && desc->log2_chroma_h == 1 ? "4:2:0"
+                         : desc->log2_chroma_w == 1 && desc->log2_chroma_h == 0 ? "4:2:2"
+                         : desc->log2_chroma_w == 0 && desc->log2_chroma_h == 0 ? "4:4:4"
+                                                                                : "other chroma layout";
+    throw InputError(source + ": pixel format " + desc->name + " (" + std::to_string(desc->comp[0].depth) + "-bit " +
+                     layout + "); VOCA needs 8-bit 4:2:0 (or 4:0:0 gray) video");
+  }
+}
 
 void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
   if (rc == AVERROR_INVALIDDATA || rc == AVERROR_BUG || rc == AVERROR_PATCHWELCOME) {
@@ -390,6 +441,7 @@ bool VideoDecoder::receive(DecodedFrame& out) {
     d.queue_head = (d.queue_head + 1) % d.motion_queue.size();
     --d.queue_size;
   }
+  d.refuseUnusableStructure(*vectors);
   d.convert(*frame, *vectors, out);
   out.damaged = damaged;
   return true;
