@@ -16,6 +16,7 @@ packages=(
   libcli11-dev                                   # command-line parsing
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
+  clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
 )
 
 missing=()

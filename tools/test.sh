@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The test suite as CI runs it: install packages, build Release, run every test; then build the
-# bad-input tests with AddressSanitizer and run those again.
+# bad-input tests with AddressSanitizer and run those again, and fuzz every input parser briefly.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
@@ -12,6 +12,16 @@ asan_targets=$(ctest --preset asan -N | sed -n 's/^ *Test *#[0-9]*: *//p')
 if [ -n "${asan_targets}" ]; then
   cmake --build --preset asan --target ${asan_targets}
   ctest --preset asan
+fi
+
+# Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
+# committed seed corpora (regression inputs included); any crash, leak or sanitizer report fails.
+# VOCA_FUZZ_SECONDS changes the time per target; 0 skips the stage.
+fuzz_seconds=${VOCA_FUZZ_SECONDS:-10}
+if [ "${fuzz_seconds}" != 0 ]; then
+  fuzz_start=$SECONDS
+  bash tools/fuzz.sh "${fuzz_seconds}"
+  echo "fuzz: build and runs took $((SECONDS - fuzz_start)) s"
 fi
 
 # Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot

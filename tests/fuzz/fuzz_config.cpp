@@ -1,0 +1,9 @@
+// The configuration JSON (frontend and backend sections, every key validated).
+#include "tests/fuzz/fuzz_support.h"
+#include "voca/config/config.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const auto path = voca::fuzz::writeInput("config.json", data, size);
+  voca::fuzz::expectOnlyInputErrors([&] { voca::loadConfig(path); });
+  return 0;
+}

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Runs the libFuzzer targets (tests/fuzz) built with AddressSanitizer + UBSan.
+#
+#   bash tools/fuzz.sh [seconds per target] [target...]     e.g. bash tools/fuzz.sh 600 fuzz_video
+#
+# Each target starts from its committed seed corpus tests/fuzz/corpus/<target>/ (regression inputs
+# included) plus what earlier runs found (build/fuzz/corpus/<target>/, kept between runs). A crash,
+# leak, sanitizer report or timeout stops that target, leaves the input in build/fuzz/crashes/ and
+# makes the script exit 1 after all targets ran; add the input to the seed corpus once fixed.
+# Default: 20 s per target. The last line per target says how many inputs it survived.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-20}
+shift || true
+cmake --preset fuzz >/dev/null
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+[ ${#launcher[@]} -gt 0 ] && cmake --preset fuzz "${launcher[@]}" >/dev/null
+cmake --build --preset fuzz
+
+targets=("$@")
+if [ ${#targets[@]} -eq 0 ]; then
+  mapfile -t targets < <(cd tests/fuzz/corpus && ls -d fuzz_* | sort)
+fi
+work=build/fuzz/work
+mkdir -p "$work"
+failed=()
+summary=()
+for target in "${targets[@]}"; do
+  seeds=tests/fuzz/corpus/$target
+  found=build/fuzz/corpus/$target
+  crashes=build/fuzz/crashes/$target
+  mkdir -p "$found" "$crashes"
+  log=$work/$target.log
+  # New inputs go to build/fuzz/corpus (the first directory); the seeds are only read.
+  # -rss_limit_mb: the video decoder may legitimately allocate a few hundred MB for a large frame.
+  status=0
+  TMPDIR=${TMPDIR:-/tmp} "build/fuzz/bin/$target" "$found" "$seeds" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -artifact_prefix="$crashes/" \
+    >"$log" 2>&1 || status=$?
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  if [ "$status" -ne 0 ]; then
+    failed+=("$target")
+    echo "FAILED: $target (exit $status); log $log, input in $crashes/"
+    grep -m 20 -E 'ERROR|SUMMARY|runtime error|uncaught|Test unit written' "$log" || tail -20 "$log"
+  fi
+  summary+=("$(printf '%-24s %10s inputs in %s s%s' "$target" "${runs:-?}" "$seconds" "$([ "$status" -ne 0 ] && echo '  FAILED')")")
+done
+printf '%s\n' "${summary[@]}"
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz: ${#failed[@]} target(s) failed: ${failed[*]}"
+  exit 1
+fi
+echo "fuzz: ${#targets[@]} targets, no crash, leak or sanitizer report"
