@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kSize = 64, kFrames = 8;
+constexpr int kFrames = 8;
 
 struct ClipSpec {
   std::string codec = "libx264";
@@ -32,15 +32,16 @@ struct ClipSpec {
   std::string x264_params = "bframes=0:ref=1";
   int max_b_frames = 0;     // mpeg2video / mpeg4
   bool interlaced = false;  // mpeg2video: field-based coding
+  int size = 64;
 };
 
-// Writes a moving gradient, 8 frames of 64x64, as an elementary stream (headers in band).
+// Writes a moving gradient, 8 frames of 64x64 (spec.size), as an elementary stream (headers in band).
 void writeClip(const fs::path& path, const ClipSpec& spec) {
   const AVCodec* codec = avcodec_find_encoder_by_name(spec.codec.c_str());
   REQUIRE(codec != nullptr);
   AVCodecContext* ctx = avcodec_alloc_context3(codec);
-  ctx->width = kSize;
-  ctx->height = kSize;
+  ctx->width = spec.size;
+  ctx->height = spec.size;
   ctx->pix_fmt = spec.format;
   ctx->time_base = AVRational{1, 25};
   ctx->framerate = AVRational{25, 1};
@@ -62,8 +63,8 @@ void writeClip(const fs::path& path, const ClipSpec& spec) {
   REQUIRE_MESSAGE(opened == 0, "cannot open " << spec.codec << " for " << av_get_pix_fmt_name(spec.format));
   AVFrame* frame = av_frame_alloc();
   frame->format = spec.format;
-  frame->width = kSize;
-  frame->height = kSize;
+  frame->width = spec.size;
+  frame->height = spec.size;
   REQUIRE(av_frame_get_buffer(frame, 0) == 0);
   const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(spec.format);
   const int bytes = desc->comp[0].depth > 8 ? 2 : 1;
@@ -79,8 +80,8 @@ void writeClip(const fs::path& path, const ClipSpec& spec) {
   for (int i = 0; i < kFrames; ++i) {
     REQUIRE(av_frame_make_writable(frame) == 0);
     for (int plane = 0; plane < desc->nb_components; ++plane) {
-      const int w = plane == 0 ? kSize : AV_CEIL_RSHIFT(kSize, desc->log2_chroma_w);
-      const int h = plane == 0 ? kSize : AV_CEIL_RSHIFT(kSize, desc->log2_chroma_h);
+      const int w = plane == 0 ? spec.size : AV_CEIL_RSHIFT(spec.size, desc->log2_chroma_w);
+      const int h = plane == 0 ? spec.size : AV_CEIL_RSHIFT(spec.size, desc->log2_chroma_h);
       for (int y = 0; y < h; ++y) {
         std::uint8_t* row = frame->data[plane] + static_cast<std::ptrdiff_t>(y) * frame->linesize[plane];
         for (int x = 0; x < w; ++x) {
@@ -216,4 +217,21 @@ TEST_CASE("bit depths other than 8 and chroma other than 4:2:0 are refused by na
     voca::test::expectError(error, c.expected);
     voca::test::expectError(error, "VOCA needs 8-bit 4:2:0");
   }
+}
+
+TEST_CASE("a frame size change within a raw stream is refused, not passed on to stages sized for the first") {
+  voca::test::ScratchDir dir("decode-structure-resize");
+  ClipSpec first, second;
+  second.size = 48;
+  writeClip(dir / "a.h264", first);
+  writeClip(dir / "b.h264", second);
+  {
+    std::ofstream joined(dir / "joined.h264", std::ios::binary);
+    for (const char* part : {"a.h264", "b.h264"}) {
+      std::ifstream in(dir / part, std::ios::binary);
+      joined << in.rdbuf();
+    }
+  }
+  voca::test::expectError(decodeClip(dir / "joined.h264"),
+                          "joined.h264: frame 8 is 48x48 but the stream starts at 64x64");
 }

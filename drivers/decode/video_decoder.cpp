@@ -118,6 +118,15 @@ void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
     throw InputError(source + ": frame " + std::to_string(frames_out) +
                      " is a B-frame; VOCA needs a causal stream without B-frames (x264: bframes=0)");
   }
+  // Every stage and buffer is sized from the stream's header; a raw stream can switch to another
+  // SPS mid-way. Checked on software frames only (a hardware wrapper may report aligned sizes)
+  // and when the stream has a header size (a live source may not).
+  if ((motion || choice.backend == DecoderBackend::kSoftware) && stream.width > 0 &&
+      (parsed.width != stream.width || parsed.height != stream.height)) {
+    throw InputError(source + ": frame " + std::to_string(frames_out) + " is " + std::to_string(parsed.width) + "x" +
+                     std::to_string(parsed.height) + " but the stream starts at " + std::to_string(stream.width) + "x" +
+                     std::to_string(stream.height) + "; a size change within a video is not supported");
+  }
   if (parsed.interlaced_frame != 0) {
     throw InputError(source + ": frame " + std::to_string(frames_out) +
                      " is interlaced (field or MBAFF coding); VOCA needs progressive frames");
