@@ -8,4 +8,5 @@ voca_add_test(test_decode_e2e SOURCES test_decode_e2e.cpp LIBS voca_drivers_deco
 voca_add_test(test_decode_alloc SOURCES test_decode_alloc.cpp LIBS voca_drivers_decode voca_drivers_encode)
 # Stream structures the method cannot use (B-frames, several references, interlacing, other
 # formats) are refused by name; tiny clips made in the test with libavcodec.
-voca_add_test(test_decode_structure SOURCES test_decode_structure.cpp LIBS voca_drivers_decode PkgConfig::FFMPEG)
+voca_add_test(test_decode_structure SOURCES test_decode_structure.cpp LIBS voca_drivers_decode PkgConfig::FFMPEG
+              LABELS asan)

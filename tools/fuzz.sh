@@ -12,10 +12,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
-cmake --preset fuzz >/dev/null
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-[ ${#launcher[@]} -gt 0 ] && cmake --preset fuzz "${launcher[@]}" >/dev/null
+cmake --preset fuzz "${launcher[@]}" >/dev/null
 cmake --build --preset fuzz
 
 targets=("$@")
