@@ -144,7 +144,7 @@ void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
                        "which past frame it points to");
     }
   }
-  AVPixelFormat format = static_cast<AVPixelFormat>(parsed.format);
+  const auto format = static_cast<AVPixelFormat>(parsed.format);
   const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(format);
   if (desc != nullptr && (desc->flags & AV_PIX_FMT_FLAG_HWACCEL) != 0) desc = av_pix_fmt_desc_get(ctx.sw_pix_fmt);
   if (desc == nullptr) return;  // a hardware wrapper that does not say; its pixels are checked in convert()
