@@ -175,32 +175,78 @@ TEST_CASE("copies keep the full capacity, so a copied field still takes a whole 
   checkCopy(smaller);
 }
 
-TEST_CASE("I-frame bridging carries the last P-frame's field, flagged as bridged") {
+TEST_CASE("I-frame bridging: the last field with vectors carries over I-frames, never across a gap") {
   voca::IFrameBridge bridge(64, 64);
-  MotionField p(64, 64), i_frame(64, 64), first_i(64, 64);
-
-  first_i.reset(64, 64, PictureType::kI);
-  first_i.finalize();
-  CHECK_FALSE(bridge.apply(first_i));  // nothing to bridge from yet
-  CHECK_FALSE(first_i.hasVectors());
-
-  p.reset(64, 64, PictureType::kP);
-  p.addBlock(0, 0, 16, 16, 2.f, 3.f);
-  p.finalize();
-  p.setSourceFrame(5);
-  CHECK_FALSE(bridge.apply(p));
-  CHECK_FALSE(p.bridged());
-
+  MotionField p(64, 64), i_frame(64, 64), b_frame(64, 64);
+  const auto makeInter = [](MotionField& field, PictureType type, float dx) {
+    field.reset(64, 64, type);
+    field.addBlock(0, 0, 16, 16, dx, 3.f);
+    field.finalize();
+  };
   i_frame.reset(64, 64, PictureType::kI);
   i_frame.finalize();
-  i_frame.setSourceFrame(6);
-  CHECK(bridge.apply(i_frame));
-  CHECK(i_frame.bridged());
-  CHECK(i_frame.pictureType() == PictureType::kI);
-  CHECK(i_frame.sourceFrame() == 5);
-  REQUIRE(i_frame.blockAt(8, 8) != nullptr);
-  CHECK(i_frame.blockAt(8, 8)->dx == 2.f);
-  CHECK(i_frame.blockAt(20, 8) == nullptr);
+  bool bridged = false;
+
+  // Nothing to bridge from yet.
+  CHECK(bridge.prior(i_frame, 0, bridged) == nullptr);
+  CHECK_FALSE(bridged);
+
+  // A P-frame's own vectors are its prior (not a copy).
+  makeInter(p, PictureType::kP, 2.f);
+  CHECK(bridge.prior(p, 0, bridged) == &p);
+  CHECK_FALSE(bridged);
+
+  // The I-frame gets the remembered copy, flagged; the copy outlives the P-frame's buffer, which
+  // the decoder reuses.
+  const MotionField* carried = nullptr;
+  {
+    voca::IFrameBridge fresh(64, 64);
+    makeInter(p, PictureType::kP, 2.f);
+    REQUIRE(fresh.prior(p, 0, bridged) == &p);
+    p.reset(64, 64, PictureType::kP);  // overwritten by the next decode
+    carried = fresh.prior(i_frame, 0, bridged);
+    REQUIRE(carried != nullptr);
+    CHECK(carried != &i_frame);
+    CHECK(bridged);
+    REQUIRE(carried->blockAt(8, 8) != nullptr);
+    CHECK(carried->blockAt(8, 8)->dx == 2.f);
+    CHECK(carried->blockAt(20, 8) == nullptr);
+  }
+
+  // The tracker's rules: any field with vectors is remembered (a B-frame too) ...
+  bridged = false;
+  makeInter(b_frame, PictureType::kB, 5.f);
+  CHECK(bridge.prior(b_frame, 0, bridged) == &b_frame);
+  carried = bridge.prior(i_frame, 0, bridged);
+  REQUIRE(carried != nullptr);
+  CHECK(bridged);
+  CHECK(carried->blockAt(8, 8)->dx == 5.f);
+
+  // ... only an I-frame is bridged (an inter picture without vectors has no prior) ...
+  MotionField empty_p(64, 64);
+  empty_p.reset(64, 64, PictureType::kP);
+  empty_p.finalize();
+  bridged = false;
+  CHECK(bridge.prior(empty_p, 0, bridged) == nullptr);
+  CHECK_FALSE(bridged);
+
+  // ... and after a gap there is no prior at all, although the vectors are still remembered.
+  makeInter(p, PictureType::kP, 9.f);
+  CHECK(bridge.prior(p, 1, bridged) == nullptr);
+  CHECK(bridge.prior(i_frame, 2, bridged) == nullptr);
+  CHECK_FALSE(bridged);
+  carried = bridge.prior(i_frame, 0, bridged);
+  REQUIRE(carried != nullptr);
+  CHECK(carried->blockAt(8, 8)->dx == 9.f);
+
+  // clear() forgets; a disabled bridge passes a frame's own vectors and never carries.
+  bridge.clear();
+  bridged = false;
+  CHECK(bridge.prior(i_frame, 0, bridged) == nullptr);
+  voca::IFrameBridge disabled(64, 64, false);
+  CHECK(disabled.prior(p, 0, bridged) == &p);
+  CHECK(disabled.prior(i_frame, 0, bridged) == nullptr);
+  CHECK_FALSE(bridged);
 }
 
 TEST_CASE("median thresholding flags vectors that deviate from their neighbourhood") {

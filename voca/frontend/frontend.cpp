@@ -71,7 +71,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
     cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
     cam.resetSlots();
-    cam.last_p_frame = MotionField(max_width, max_height);
+    cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes);
   }
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
   T_cam1_cam0_ = T_cam0_cam1.inverse();
@@ -136,7 +136,7 @@ void KltFrontend::reset() {
     cam.points.clear();
     cam.resetSlots();
     cam.traces.clear();
-    cam.have_last_p_frame = false;
+    cam.bridge.clear();
   }
   have_previous_ = false;
 }
@@ -171,23 +171,8 @@ bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const Ima
 
 const MotionField* KltFrontend::priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
   if (!input.has_motion || config_.prior_mode == PriorMode::kNone) return nullptr;
-  const MotionField* field = &input.motion[static_cast<std::size_t>(camera)];
-  CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
-  if (field->hasVectors()) {
-    if (config_.bridge_iframes) {
-      cam.last_p_frame.copyFrom(*field);
-      cam.have_last_p_frame = true;
-    }
-    // After a gap the vectors describe the motion from a picture the tracker never saw.
-    return input.frames_missing_before == 0 ? field : nullptr;
-  }
-  if (input.frames_missing_before > 0) return nullptr;
-  const bool intra = field->pictureType() == PictureType::kI;
-  if (config_.bridge_iframes && intra && cam.have_last_p_frame) {
-    stats.bridged[static_cast<std::size_t>(camera)] = true;
-    return &cam.last_p_frame;
-  }
-  return nullptr;
+  const auto c = static_cast<std::size_t>(camera);
+  return cameras_[c].bridge.prior(input.motion[c], input.frames_missing_before, stats.bridged[c]);
 }
 
 void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendStats& stats) {

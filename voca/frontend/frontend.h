@@ -103,8 +103,7 @@ class KltFrontend {
     std::vector<PatchTemplate> pool;
     std::vector<int> free_slots;
     int num_levels = 0;
-    MotionField last_p_frame;
-    bool have_last_p_frame = false;
+    IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     std::vector<PointTrace> traces;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }

@@ -70,7 +70,6 @@ void MotionField::reset(int width, int height, PictureType type) {
   height_ = height;
   grid_stride_ = static_cast<std::size_t>((width + kCellPx - 1) / kCellPx);
   type_ = type;
-  bridged_ = false;
   source_frame_ = -1;
   blocks_.clear();
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height + kCellPx - 1) / kCellPx);
@@ -141,18 +140,10 @@ void MotionField::copyFrom(const MotionField& other) {
   height_ = other.height_;
   grid_stride_ = other.grid_stride_;
   type_ = other.type_;
-  bridged_ = other.bridged_;
   source_frame_ = other.source_frame_;
   blocks_.assign(other.blocks_.begin(), other.blocks_.end());
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height_ + kCellPx - 1) / kCellPx);
   std::copy_n(other.grid_.begin(), static_cast<std::ptrdiff_t>(cells), grid_.begin());
-}
-
-void MotionField::bridgeFrom(const MotionField& earlier) {
-  const PictureType own_type = type_;
-  copyFrom(earlier);
-  type_ = own_type;
-  bridged_ = true;
 }
 
 int MotionField::flagOutliers(const OutlierParams& params) {
@@ -213,18 +204,20 @@ int MotionField::flagOutliers(const OutlierParams& params) {
   return flagged;
 }
 
-bool IFrameBridge::apply(MotionField& field) {
+const MotionField* IFrameBridge::prior(const MotionField& field, int frames_missing_before, bool& bridged) {
   if (field.hasVectors()) {
-    if (field.pictureType() != PictureType::kI) {
+    if (enabled_) {
       last_.copyFrom(field);
       have_last_ = true;
     }
-    return false;
+    return frames_missing_before == 0 ? &field : nullptr;
   }
-  if (!have_last_ || field.pictureType() != PictureType::kI) return false;
-  if (last_.width() != field.width() || last_.height() != field.height()) return false;
-  field.bridgeFrom(last_);
-  return true;
+  if (frames_missing_before > 0) return nullptr;
+  if (enabled_ && have_last_ && field.pictureType() == PictureType::kI) {
+    bridged = true;
+    return &last_;
+  }
+  return nullptr;
 }
 
 }  // namespace voca

@@ -98,20 +98,13 @@ class MotionField {
   int height() const { return height_; }
   PictureType pictureType() const { return type_; }
 
-  // True when the vectors were carried over from an earlier P-frame (I-frame bridging); the
-  // picture type stays that of this frame.
-  bool bridged() const { return bridged_; }
-  // Index of the frame the vectors were decoded from: this frame's own index unless bridged. Set by
-  // the decoder.
+  // Index of the frame the vectors were decoded from. Set by the decoder.
   std::int64_t sourceFrame() const { return source_frame_; }
   void setSourceFrame(std::int64_t frame) { source_frame_ = frame; }
 
   // Copy another field's blocks, grid, size and flags into this one without allocating (capacity
   // must suffice: throws std::length_error otherwise).
   void copyFrom(const MotionField& other);
-  // Replace this frame's (absent) vectors with those of an earlier field, keeping this frame's
-  // picture type and marking the result as bridged.
-  void bridgeFrom(const MotionField& earlier);
 
   // Set MotionBlock::outlier by median thresholding; returns the number of flagged blocks.
   int flagOutliers(const OutlierParams& params = {});
@@ -121,7 +114,6 @@ class MotionField {
   int width_ = 0, height_ = 0;
   std::size_t grid_stride_ = 0;
   PictureType type_ = PictureType::kUnknown;
-  bool bridged_ = false;
   std::int64_t source_frame_ = -1;
   std::vector<MotionBlock> blocks_;
   std::vector<std::int32_t> grid_;
@@ -131,19 +123,30 @@ class MotionField {
   std::uint32_t stamp_ = 0;
 };
 
-// Carries motion over I-frames (paper section "Bridging I-frames"): feed every frame's field in
-// stream order; a P-frame's field is remembered, and a field without vectors (I-frame) is replaced
-// by the remembered one, flagged as bridged. No allocation after construction.
+// The motion prior of each frame of one camera's stream, carried over I-frames (the paper's
+// "Bridging I-frames"); the one place that decides which vectors predict a frame's motion. Feed
+// every frame's field in stream order. No allocation after construction.
 class IFrameBridge {
  public:
-  IFrameBridge(int max_width, int max_height) : last_(max_width, max_height) {}
-  // Returns true when `field` was bridged.
-  bool apply(MotionField& field);
+  IFrameBridge() = default;
+  // enabled = false: a frame's own vectors or none, nothing is carried over.
+  IFrameBridge(int max_width, int max_height, bool enabled = true) : last_(max_width, max_height), enabled_(enabled) {}
+
+  // The field whose vectors give this frame's motion from the previous frame the tracker saw:
+  //  - the frame's own field when it has vectors (and, when enabled, remembered for later I-frames,
+  //    whatever the picture type);
+  //  - for an I-frame without vectors, the last remembered field; `bridged` is set to true;
+  //  - nullptr otherwise, and always after a gap (frames_missing_before > 0): the vectors then
+  //    describe the motion from a picture the tracker never saw.
+  // The result stays valid until the next call.
+  const MotionField* prior(const MotionField& field, int frames_missing_before, bool& bridged);
+  // Forgets the remembered field.
   void clear() { have_last_ = false; }
 
  private:
   MotionField last_;
   bool have_last_ = false;
+  bool enabled_ = true;
 };
 
 }  // namespace voca

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Shows that two builds of the voca tool estimate the same trajectories, byte for byte: for a
+# refactoring that must not change behaviour (issue 13). Runs the same inputs through both binaries
+# and compares the sha256 of every trajectory file; prints the hashes and exits non-zero on any
+# difference.
+#
+#   tools/check_identical.sh <voca-A> <voca-B> [--euroc <mav0 folder>] [--kitti <sequence folder>]
+#
+# Always: a synthetic aggressive sequence (generated and encoded once with binary A) run with
+# --mode none and --mode mv_parallel_of. Optional: an EuRoC mav0 folder encoded on the fly at 500k
+# (calibration from its camN/sensor.yaml) and a KITTI odometry sequence folder.
+set -euo pipefail
+
+usage() {
+  echo "usage: $0 <voca-A> <voca-B> [--euroc <mav0 folder>] [--kitti <sequence folder>]" >&2
+  exit 2
+}
+[[ $# -ge 2 ]] || usage
+voca_a=$(realpath "$1")
+voca_b=$(realpath "$2")
+shift 2
+euroc=""
+kitti=""
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --euroc) euroc=$(realpath "${2:?--euroc needs a folder}"); shift 2 ;;
+    --kitti) kitti=$(realpath "${2:?--kitti needs a folder}"); shift 2 ;;
+    *) usage ;;
+  esac
+done
+for binary in "$voca_a" "$voca_b"; do
+  [[ -x "$binary" ]] || { echo "$0: $binary is not an executable" >&2; exit 2; }
+done
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+
+echo "inputs: synthetic aggressive sequence (6 s), encoded at 500k" >&2
+"$voca_a" synth --out s --motion aggressive --seconds 6 >/dev/null
+"$voca_a" encode s --out s500 --bitrate 500k >/dev/null
+
+# name and arguments of each run; the trajectory goes to <label>/<name>.txt
+runs=("synth_none|run s500 --mode none"
+      "synth_mv_parallel_of|run s500 --mode mv_parallel_of")
+[[ -n "$euroc" ]] && runs+=("euroc_500k|run $euroc --encode 500k")
+[[ -n "$kitti" ]] && runs+=("kitti|run $kitti")
+
+status=0
+for run in "${runs[@]}"; do
+  name=${run%%|*}
+  args=${run#*|}
+  for label in a b; do
+    binary=$voca_a
+    [[ $label == b ]] && binary=$voca_b
+    mkdir -p "$label"
+    # shellcheck disable=SC2086  # the arguments are split on purpose
+    "$binary" $args --out "$label/$name.txt" >"$label/$name.log" 2>&1 ||
+      { echo "$name: voca ($label) failed:" >&2; tail -5 "$label/$name.log" >&2; status=1; continue 2; }
+  done
+  hash_a=$(sha256sum "a/$name.txt" | cut -d' ' -f1)
+  hash_b=$(sha256sum "b/$name.txt" | cut -d' ' -f1)
+  lines=$(wc -l <"a/$name.txt")
+  if [[ "$hash_a" == "$hash_b" ]]; then
+    echo "identical  $name  $hash_a  ($lines lines)"
+  else
+    echo "DIFFERENT  $name  A $hash_a  B $hash_b"
+    status=1
+  fi
+done
+exit $status
