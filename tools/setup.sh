@@ -16,6 +16,7 @@ packages=(
   libcli11-dev                                   # command-line parsing
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
+  python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
 )
 
 missing=()
