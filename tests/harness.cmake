@@ -1,3 +1,7 @@
 # The evaluation harness (`voca bench suite` / `collect`): suite files, plans and tables without running
 # anything; then the harness end to end through the `voca` binary, and the shipped default suite.
 voca_add_test(test_harness SOURCES test_harness.cpp LIBS voca_harness LABELS asan)
+voca_add_test(test_bench_suite_e2e SOURCES test_bench_suite_e2e.cpp LIBS nlohmann_json::nlohmann_json LABELS e2e
+              TIMEOUT 900)
+target_compile_definitions(test_bench_suite_e2e PRIVATE VOCA_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+add_dependencies(test_bench_suite_e2e voca)

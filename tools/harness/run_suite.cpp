@@ -144,6 +144,8 @@ std::set<std::string> prepare(const std::vector<Job>& all, const fs::path& out, 
       [&](std::size_t i, const platform::ChildExit& exit, double seconds) {
         const Job& job = *todo[i];
         const fs::path partial = job.output.string() + ".partial";
+        if (options.stop_requested && options.stop_requested() && interruptedBySignal(exit))
+          return;  // redone next call
         if (exit.succeeded()) {
           fs::rename(partial, job.output);
         } else {
@@ -319,6 +321,11 @@ SuiteRunReport runSuite(const Suite& suite, const SuitePlan& plan, const fs::pat
     failed_preparations.insert(failed_encodes.begin(), failed_encodes.end());
   }
 
+  if (options.stop_requested && options.stop_requested()) {
+    report.stopped = true;  // no run is started or recorded as failed for an interrupted preparation
+    return report;
+  }
+
   std::vector<const PlannedRun*> todo;
   for (const PlannedRun& run : plan.runs) {
     const std::optional<json> previous = readJson(resultFile(run.job.output));
@@ -402,9 +409,10 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
   for (const PlannedRun& run : plan.runs) {
     std::optional<json> result = readJson(resultFile(run.job.output));
     if (!result && (fs::exists(statisticsFile(run.job.output)) || fs::exists(trajectoryFile(run.job.output)))) {
-      // A cluster job leaves outputs but no result.json: summarise it now (its exit code is unknown).
+      // A cluster job leaves outputs but no result.json: summarise it now (its exit code is unknown). Only a
+      // finished run is stored as done; one without statistics may still be running elsewhere.
       result = summariseRun(run, std::nullopt, 0.0);
-      writeFile(resultFile(run.job.output), result->dump(2) + "\n");
+      if (result->value("status", "") == "ok") writeFile(resultFile(run.job.output), result->dump(2) + "\n");
     }
     if (!result) continue;
     results[{run.sequence, run.bitrate, run.system}] = *result;

@@ -40,11 +40,9 @@ int runSuiteCommand(const SuiteOptions& o) {
   if (!o.emit_jobs.empty()) {
     // The suite file goes into the folder now, so `voca bench collect` finds it after the jobs ran.
     harness::writeSuiteFile(suite, out);
-    if (o.emit_jobs == "prepare") {
+    if (o.emit_jobs == "synth") {
       for (const harness::Job& job : plan.synth) fmt::print("{}\n", harness::shellCommand(job.argv));
-      if (!plan.synth.empty() && !plan.encodes.empty()) {
-        fmt::print(stderr, "note: the encodings below need the synthetic sequences above first\n");
-      }
+    } else if (o.emit_jobs == "encode") {
       for (const harness::Job& job : plan.encodes) fmt::print("{}\n", harness::shellCommand(job.argv));
     } else {
       for (const harness::PlannedRun& run : plan.runs) {
@@ -77,9 +75,9 @@ Runner configureSuiteBench(CLI::App& app) {
   app.add_option("--out,-o", o->out, "Output folder: encodings, runs, tables (a second call resumes)")->required();
   app.add_option("--jobs,-j", o->jobs, "Runs at a time, each its own `voca` process")->capture_default_str();
   app.add_option("--emit-jobs", o->emit_jobs,
-                 "Print the jobs instead of running them, one complete command line each: 'prepare' (synthetic "
-                 "renderings, then encodings) or 'run' (the runs, independent of each other once prepared)")
-      ->check(CLI::IsMember({"prepare", "run"}));
+                 "Print one stage's jobs instead of running them, one complete command line each, independent of "
+                 "each other: 'synth' (renderings), then 'encode' (encodings), then 'run' (the runs)")
+      ->check(CLI::IsMember({"synth", "encode", "run"}));
   app.add_flag("--retry-failed", o->retry_failed, "Run again what an earlier call recorded as failed");
   app.footer(
       "A suite names sequences (dataset folders, VOCA video folders or `voca synth` arguments), bitrates\n"
@@ -88,8 +86,8 @@ Runner configureSuiteBench(CLI::App& app) {
       "each run is a child `voca run` writing <out>/runs/<id>/{trajectory.txt,stats.json,log.txt,\n"
       "result.json}. A run that crashes or fails is recorded as x and the suite goes on; a second call\n"
       "skips what is done. Tables follow the paper's rules: <out>/tables/<bitrate>.{md,csv,tex},\n"
-      "<out>/summary.md. Cluster: --emit-jobs prepare | parallel, then --emit-jobs run | parallel (or a\n"
-      "Slurm array), then `voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
+      "<out>/summary.md. Cluster: --emit-jobs synth, then encode, then run, each | parallel (or a Slurm\n"
+      "array), then `voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
   return [o] { return runSuiteCommand(*o); };
 }
 
