@@ -133,7 +133,7 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
                          dir / "log2.txt") == 0);
   CHECK(output.find("4 runs, 4 done before, 0 run now, 0 failed") != std::string::npos);
 
-  // Jobs for a cluster: complete command lines, one per run, the encodings before.
+  // Jobs for a cluster: complete command lines, one per run; renderings and encodings as stages before.
   REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --emit-jobs run",
                          output, dir / "jobs.txt") == 0);
   std::istringstream lines(output);
@@ -145,10 +145,10 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
     CHECK(line.find("--stats " + (out / "runs").string()) != std::string::npos);
   }
   CHECK(jobs == 4);
-  REQUIRE(
-      runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --emit-jobs prepare",
-                     output, dir / "prepare.txt") == 0);
+  const std::string emit = "bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --emit-jobs ";
+  REQUIRE(runVocaCapture(emit + "synth", output, dir / "synth.txt") == 0);
   CHECK(output.find("/voca synth --motion gentle") != std::string::npos);
+  REQUIRE(runVocaCapture(emit + "encode", output, dir / "encode.txt") == 0);
   CHECK(output.find("/voca encode " + (out / "sequences" / "room").string()) != std::string::npos);
 
   // What a cluster job leaves: outputs without result.json. Run one emitted line by hand, as a job would.
