@@ -112,6 +112,34 @@ TEST_CASE("planSuite: one encoding per sequence and bitrate, raw runs the baseli
   CHECK(voca::harness::planSuite(again, "/out", "/bin/voca").runs.size() == plan.runs.size());
 }
 
+TEST_CASE("planSuite: encodings made elsewhere are used as given; a video folder runs every mode as recorded") {
+  voca::test::ScratchDir dir("harness-plan");
+  voca::test::writeText(dir / "video" / "mav0" / "cam0" / "data.mp4", "");  // only its presence is looked at
+  fs::create_directories(dir / "seq-500k");
+  const json suite = {{"sequences",
+                       {{{"name", "v"}, {"path", (dir / "video").string()}},
+                        {{"name", "s"}, {"synth", {"--seconds", "1"}}, {"encoded", {{"500k", "seq-500k"}}}}}},
+                      {"bitrates", {"raw", "500k"}},
+                      {"modes", {"none", "mv_parallel_of"}}};
+  const voca::harness::Suite parsed = voca::harness::parseSuite(suite, dir.path(), "s.json");
+  const voca::harness::SuitePlan plan = voca::harness::planSuite(parsed, "/out", "voca");
+  CHECK(plan.encodes.size() == 1);  // only v at 500k; s's 500k exists already
+  CHECK(plan.encodes[0].id == "encode/v_500k");
+  int video_raw = 0;
+  for (const auto& run : plan.runs) {
+    if (run.sequence == "v" && run.bitrate == "raw") ++video_raw;
+    if (run.sequence == "s" && run.bitrate == "500k") {
+      CHECK(run.input == dir / "seq-500k");
+      CHECK(run.preparation_id.empty());
+    }
+  }
+  CHECK(video_raw == 2);  // both modes: the video carries motion vectors
+  json missing = suite;
+  missing["sequences"][1]["encoded"]["1M"] = "nowhere";
+  CHECK(inputErrorOf([&] { voca::harness::parseSuite(missing, dir.path(), "s.json"); }).find("encoded.1000k: ") !=
+        std::string::npos);
+}
+
 TEST_CASE("tables as Markdown, CSV and LaTeX: values in cm, failures, emphasis, greyed rows") {
   using voca::RunMetrics;
   using voca::RunOutcome;

@@ -497,7 +497,10 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
     summary_md += "| " + sequence.name + " |";
     for (const std::string& bitrate : suite.bitrates) {
       if (bitrate == "raw") continue;
-      const std::int64_t bytes = videoBytes(out / "videos" / (sequence.name + "_" + bitrate));
+      const auto run = std::find_if(plan.runs.begin(), plan.runs.end(), [&](const PlannedRun& r) {
+        return r.sequence == sequence.name && r.bitrate == bitrate;
+      });
+      const std::int64_t bytes = run == plan.runs.end() ? 0 : videoBytes(run->input);
       summary_md += bytes > 0 ? fmt::format(" {} |", bytes) : std::string(" ? |");
     }
     summary_md += "\n";

@@ -20,7 +20,7 @@ namespace {
 
 constexpr const char* kSuiteKeys =
     "name, sequences, bitrates, modes, bridging, configs, frames, encode_fps, decoded_png, run_args, rules, external";
-constexpr const char* kSequenceKeys = "name, path, synth, calib, gt, config, optional";
+constexpr const char* kSequenceKeys = "name, path, synth, calib, gt, config, encoded, optional";
 constexpr const char* kRulesKeys = "ate_divergence_m, rte_divergence_m, min_reset_free_fraction";
 constexpr const char* kExternalKeys = "system, sequence, bitrate, trajectory";
 
@@ -79,6 +79,14 @@ SuiteSequence parseSequence(const json& value, const fs::path& base, const std::
       sequence.ground_truth = resolve(base, readString(item, at));
     } else if (key == "config") {
       sequence.config = readString(item, at);
+    } else if (key == "encoded") {
+      if (!item.is_object())
+        fail(at, "expected an object: bitrate -> VOCA video folder, e.g. {\"500k\": \"V101-500k\"}");
+      for (const auto& [bitrate, folder] : item.items()) {
+        const std::string label = normaliseBitrate(bitrate, at);
+        if (label == "raw") fail(at, "\"raw\" is the dataset itself, not an encoding");
+        sequence.encoded[label] = resolve(base, readString(folder, at + "." + bitrate));
+      }
     } else if (key == "optional") {
       if (!item.is_boolean()) fail(at, "expected true or false");
       sequence.optional = item.get<bool>();
@@ -96,6 +104,11 @@ SuiteSequence parseSequence(const json& value, const fs::path& base, const std::
   }
   if (sequence.calibration && !fs::exists(*sequence.calibration)) {
     fail(where + ".calib", fmt::format("{} does not exist", sequence.calibration->string()));
+  }
+  for (const auto& [bitrate, folder] : sequence.encoded) {
+    if (!fs::is_directory(folder) && !sequence.optional) {
+      fail(where + ".encoded." + bitrate, fmt::format("{} is not a folder", folder.string()));
+    }
   }
   if (sequence.ground_truth && !fs::exists(*sequence.ground_truth) && !sequence.optional) {
     fail(where + ".gt", fmt::format("{} does not exist", sequence.ground_truth->string()));
@@ -275,6 +288,7 @@ json suiteToJson(const Suite& suite) {
     if (s.calibration) j["calib"] = fs::absolute(*s.calibration).string();
     if (s.ground_truth) j["gt"] = fs::absolute(*s.ground_truth).string();
     if (s.config) j["config"] = *s.config;
+    for (const auto& [bitrate, folder] : s.encoded) j["encoded"][bitrate] = fs::absolute(folder).string();
     sequences.push_back(j);
   }
   json external = json::array();
@@ -343,10 +357,14 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
       argv.insert(argv.end(), {"--out", raw_input.string()});
       plan.synth.push_back({synth_id, argv, raw_input});
     }
+    const bool video_folder = fs::exists(raw_input / "mav0" / "cam0" / "data.mp4");
     for (const std::string& bitrate : suite.bitrates) {
       fs::path input = raw_input;
       std::string preparation = synth_id;
-      if (bitrate != "raw") {
+      if (const auto given = sequence.encoded.find(bitrate); given != sequence.encoded.end()) {
+        input = given->second;
+        preparation.clear();
+      } else if (bitrate != "raw") {
         input = out / "videos" / (sequence.name + "_" + bitrate);
         preparation = "encode/" + sequence.name + "_" + bitrate;
         std::vector<std::string> argv = {voca,    "encode", raw_input.string(), "--out", input.string(), "--bitrate",
@@ -359,7 +377,7 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
         const std::string config = sequence.config.value_or(suite_config);
         for (const std::string& mode : suite.modes) {
           // Raw frames carry no motion vectors: every mode would be the baseline.
-          if (bitrate == "raw" && mode != "none") continue;
+          if (bitrate == "raw" && !video_folder && mode != "none") continue;
           for (const bool bridge : suite.bridging) {
             const bool varies = mode != "none";
             if (!varies && !bridge && std::count(suite.bridging.begin(), suite.bridging.end(), true) > 0) continue;

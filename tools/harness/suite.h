@@ -5,6 +5,7 @@
 // cluster (`--emit-jobs`).
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,12 +19,14 @@ namespace voca::harness {
 // One sequence: a dataset folder (EuRoC, TUM-VI, KITTI, VOCA video) or a `voca synth` rendering.
 struct SuiteSequence {
   std::string name;
-  std::filesystem::path path;                        // dataset folder; for synth: where it is rendered
-  std::vector<std::string> synth_args;               // non-empty: `voca synth <args> --out <path>`
-  std::optional<std::filesystem::path> calibration;  // overrides the one found with the dataset
+  std::filesystem::path path;                         // dataset folder; for synth: where it is rendered
+  std::vector<std::string> synth_args;                // non-empty: `voca synth <args> --out <path>`
+  std::optional<std::filesystem::path> calibration;   // overrides the one found with the dataset
   std::optional<std::filesystem::path> ground_truth;  // overrides the dataset's own (TUM, EuRoC csv, KITTI)
-  std::optional<std::string> config;                 // overrides the suite's configs for this sequence
-  bool optional = false;                             // skipped (with a note) when the folder is missing
+  std::optional<std::string> config;                  // overrides the suite's configs for this sequence
+  // Encodings made elsewhere (e.g. by tools/make_eval_set.py), by bitrate: used instead of encoding.
+  std::map<std::string, std::filesystem::path> encoded;
+  bool optional = false;  // skipped (with a note) when the folder is missing
 };
 
 // A trajectory produced by another system (Basalt, ORB-SLAM3 ...) on one sequence at one bitrate,
@@ -90,7 +93,8 @@ struct SuitePlan {
 
 // Folders under out: sequences/<name> (synth), videos/<sequence>_<bitrate> (encodings, with
 // <..>_decoded beside when decoded_png), runs/<id>/ (trajectory.txt, stats.json, log.txt,
-// result.json). Modes other than none need motion vectors, so raw runs use mode none only, and
+// result.json). Modes other than none need motion vectors, so raw runs of image datasets use mode none
+// only (a VOCA video folder given as a sequence runs every mode at "raw", i.e. as recorded), and
 // bridging only varies for modes with a prior.
 SuitePlan planSuite(const Suite& suite, const std::filesystem::path& out, const std::string& voca_executable);
 
