@@ -17,13 +17,19 @@ import math
 import os
 import sys
 
-try:
-    import matplotlib
+plt = None
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-except ImportError:
-    sys.exit("plot_suite.py: matplotlib is missing (Debian: apt install python3-matplotlib)")
+
+def load_matplotlib():
+    global plt
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as pyplot
+    except ImportError:
+        sys.exit("plot_suite.py: matplotlib is missing (Debian: apt install python3-matplotlib)")
+    plt = pyplot
 
 
 def read_csv(path):
@@ -275,6 +281,7 @@ def main():
     for name in ("summary.csv", "results.csv"):
         if not os.path.exists(os.path.join(args.dir, name)):
             sys.exit(f"plot_suite.py: {args.dir} has no {name}: run `voca bench suite` or `voca bench collect` first")
+    load_matplotlib()
     out_dir = args.out or os.path.join(args.dir, "plots")
     summary = read_csv(os.path.join(args.dir, "summary.csv"))
     results = read_csv(os.path.join(args.dir, "results.csv"))
