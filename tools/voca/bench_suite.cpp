@@ -71,7 +71,7 @@ int runSuiteCommand(const SuiteOptions& o) {
 
 Runner configureSuiteBench(CLI::App& app) {
   auto o = std::make_shared<SuiteOptions>();
-  app.add_option("suite", o->suite_file, "Suite file (JSON; see configs/bench_default.json)")->required();
+  app.add_option("suite", o->suite_file, "Suite file (JSON; e.g. configs/bench_suite_default.json)")->required();
   app.add_option("--out,-o", o->out, "Output folder: encodings, runs, tables (a second call resumes)")->required();
   app.add_option("--jobs,-j", o->jobs, "Runs at a time, each its own `voca` process")->capture_default_str();
   app.add_option("--emit-jobs", o->emit_jobs,
