@@ -88,6 +88,7 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
          {"config", (dir / "broken_vo.json").string()}}}},
       {"bitrates", {"250k"}},
       {"modes", {"none", "mv_parallel_of"}},
+      {"bridging", {true, false}},
       {"decoded_png", true},
       {"run_args", {"--threads", "1"}},
       {"external",
@@ -102,8 +103,8 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --jobs 2",
                          output, dir / "log1.txt") == 0);
   CAPTURE(output);
-  CHECK(output.find("4 runs, 0 done before, 4 run now, 2 failed") != std::string::npos);
-  CHECK(output.find("[4/4]") != std::string::npos);  // the progress line counts done/total
+  CHECK(output.find("6 runs, 0 done before, 6 run now, 3 failed") != std::string::npos);
+  CHECK(output.find("[6/6]") != std::string::npos);  // the progress line counts done/total
 
   const json ok = readJson(out / "runs" / "room_250k_mv_parallel_of" / "result.json");
   CHECK(ok["status"] == "ok");
@@ -111,6 +112,9 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   CHECK(ok["ate_m"].get<double>() < 0.05);  // a synthetic room at 250k: millimetres, far below 5 cm
   CHECK(ok["video_bytes"].get<long>() > 0);
   CHECK(fs::file_size(out / "runs" / "room_250k_mv_parallel_of" / "trajectory.txt") > 0);
+  // Bridging reaches the run: the statistics say which setting it ran with.
+  CHECK(readJson(out / "runs" / "room_250k_mv_parallel_of" / "stats.json")["bridge_iframes"] == true);
+  CHECK(readJson(out / "runs" / "room_250k_mv_parallel_of_nobridge" / "stats.json")["bridge_iframes"] == false);
   const json failed = readJson(out / "runs" / "broken_250k_none" / "result.json");
   CHECK(failed["status"] == "failed");
   CHECK(failed["reason"].get<std::string>().find("no_such_key") != std::string::npos);
@@ -125,13 +129,14 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   const auto table = readText(out / "tables" / "250k.md");
   CAPTURE(table);
   // room: both modes and the external system (whose trajectory did not exist yet: x); broken: x everywhere.
-  CHECK(table.find("| ATE none | ATE mv_parallel_of | ATE other |") != std::string::npos);
-  CHECK(table.find("| *broken* † | x | x | x | x | x | x |") != std::string::npos);
+  CHECK(table.find("| ATE none | ATE mv_parallel_of | ATE mv_parallel_of (no bridging) | ATE other |") !=
+        std::string::npos);
+  CHECK(table.find("| *broken* † | x | x | x | x | x | x | x | x |") != std::string::npos);
 
   // Second call: nothing to do.
   REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string(), output,
                          dir / "log2.txt") == 0);
-  CHECK(output.find("4 runs, 4 done before, 0 run now, 0 failed") != std::string::npos);
+  CHECK(output.find("6 runs, 6 done before, 0 run now, 0 failed") != std::string::npos);
 
   // Jobs for a cluster: complete command lines, one per run; renderings and encodings as stages before.
   REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --emit-jobs run",
@@ -144,7 +149,7 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
     CHECK(line.find("/voca run ") != std::string::npos);
     CHECK(line.find("--stats " + (out / "runs").string()) != std::string::npos);
   }
-  CHECK(jobs == 4);
+  CHECK(jobs == 6);
   const std::string emit = "bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --emit-jobs ";
   REQUIRE(runVocaCapture(emit + "synth", output, dir / "synth.txt") == 0);
   CHECK(output.find("/voca synth --motion gentle") != std::string::npos);
@@ -168,15 +173,15 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   CHECK(collected["status"] == "ok");
   const auto rows = readCsv(out / "tables" / "250k.csv");
   REQUIRE(rows.size() == 1 + 2 + 3);
-  // Columns: row, greyed, then (value, shown, rank) for ATE none, ATE mv_parallel_of, ATE other, RTE ...
+  // Columns: row, greyed, then (value, shown, rank) for ATE none, mv_parallel_of, its no-bridging run, other; RTE
   const auto& room = rows[1];
-  REQUIRE(room.size() == 2 + 3 * 6);
+  REQUIRE(room.size() == 2 + 3 * 8);
   CHECK(room[0] == "room");
   CHECK(room[5 + 1] == "?");  // mv_parallel_of's ATE: no result
   REQUIRE_FALSE(room[2].empty());
-  REQUIRE_FALSE(room[8].empty());
-  CHECK(std::stod(room[8]) == doctest::Approx(std::stod(room[2])).epsilon(1e-6));  // the same trajectory
-  CHECK(readCsv(out / "results.csv").size() == 1 + 3 + 2);  // header, 3 runs with results, 2 external
+  REQUIRE_FALSE(room[11].empty());
+  CHECK(std::stod(room[11]) == doctest::Approx(std::stod(room[2])).epsilon(1e-6));  // the same trajectory
+  CHECK(readCsv(out / "results.csv").size() == 1 + 5 + 2);  // header, 5 runs with results, 2 external
 }
 
 TEST_CASE("the shipped default suite: every cell filled, sizes rise with bitrate, every mode in the summary") {
