@@ -93,8 +93,8 @@ VoRunResult runVisualOdometry(const VoRunOptions& options);
 
 // The same on an input that is already open (a live camera, a network stream, a test's source):
 // options' input, calibration, config, ground_truth, encode_bitrate_bps and max_frames are not used;
-// its mode and bridge_iframes still override the config's. Does not write options.statistics_file (the caller does,
-// after adding its own warnings). ground_truth, when given, is evaluated against.
+// its mode and bridge_iframes still override the config's. Does not write options.statistics_file
+// (the caller does, after adding its own warnings). ground_truth, when given, is evaluated against.
 VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, const VocaConfig& config,
                                 const VoRunOptions& options, const std::optional<Trajectory>& ground_truth = {},
                                 const std::string& ground_truth_name = {});
