@@ -134,6 +134,15 @@ TEST_CASE("planSuite: encodings made elsewhere are used as given; a video folder
     }
   }
   CHECK(video_raw == 2);  // both modes: the video carries motion vectors
+
+  // A KITTI folder keeps its config once encoded (the video folder would otherwise get the EuRoC one).
+  fs::create_directories(dir / "kitti" / "image_0");
+  voca::test::writeText(dir / "kitti" / "times.txt", "0.0\n");
+  const json kitti = {{"sequences", {{{"name", "k"}, {"path", (dir / "kitti").string()}}}}, {"bitrates", {"500k"}}};
+  for (const auto& run :
+       voca::harness::planSuite(voca::harness::parseSuite(kitti, dir.path(), "k.json"), "/out", "voca").runs) {
+    CHECK(voca::harness::shellCommand(run.job.argv).find("--config kitti") != std::string::npos);
+  }
   json missing = suite;
   missing["sequences"][1]["encoded"]["1M"] = "nowhere";
   CHECK(inputErrorOf([&] { voca::harness::parseSuite(missing, dir.path(), "s.json"); }).find("encoded.1000k: ") !=

@@ -358,6 +358,7 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
       plan.synth.push_back({synth_id, argv, raw_input});
     }
     const bool video_folder = fs::exists(raw_input / "mav0" / "cam0" / "data.mp4");
+    const bool kitti = fs::is_directory(raw_input / "image_0") && fs::exists(raw_input / "times.txt");
     for (const std::string& bitrate : suite.bitrates) {
       fs::path input = raw_input;
       std::string preparation = synth_id;
@@ -374,7 +375,9 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
         plan.encodes.push_back({preparation, argv, input});
       }
       for (const std::string& suite_config : suite.configs) {
-        const std::string config = sequence.config.value_or(suite_config);
+        std::string config = sequence.config.value_or(suite_config);
+        // `voca run` picks the KITTI config for a KITTI folder itself, but its encodings are video folders.
+        if (config.empty() && kitti) config = "kitti";
         for (const std::string& mode : suite.modes) {
           // Raw frames carry no motion vectors: every mode would be the baseline.
           if (bitrate == "raw" && !video_folder && mode != "none") continue;
