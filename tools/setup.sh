@@ -17,6 +17,7 @@ packages=(
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
+  python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
 )
 
 missing=()

@@ -29,14 +29,6 @@ namespace {
 // Thrown out of the encoder's progress callback when a stop is requested during --encode.
 struct EncodeInterrupted {};
 
-std::optional<Trajectory> loadGroundTruth(const Dataset& dataset) {
-  if (!dataset.ground_truth) return std::nullopt;
-  if (dataset.layout == DatasetLayout::kKitti) {
-    return loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
-  }
-  return loadTrajectory(*dataset.ground_truth);
-}
-
 // Progress on stderr: a line every few frames, and one per frame that was not tracked.
 class ProgressSink final : public FrameSink {
  public:
@@ -78,6 +70,14 @@ class ProgressSink final : public FrameSink {
 
 }  // namespace
 
+std::optional<Trajectory> loadDatasetGroundTruth(const Dataset& dataset) {
+  if (!dataset.ground_truth) return std::nullopt;
+  if (dataset.layout == DatasetLayout::kKitti) {
+    return loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
+  }
+  return loadTrajectory(*dataset.ground_truth);
+}
+
 bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested) {
@@ -112,6 +112,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
                        : kitti_default ? "kitti (built in)"
                                        : "euroc (built in)";
   if (options.mode) result.config.frontend.prior_mode = *options.mode;
+  if (options.bridge_iframes) result.config.frontend.bridge_iframes = *options.bridge_iframes;
   const std::optional<std::filesystem::path> calibration = options.calibration ? options.calibration : raw.calibration;
   if (!calibration) {
     throw InputError(
@@ -147,7 +148,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   if (options.ground_truth) {
     gt = loadTrajectory(*options.ground_truth);
     gt_name = options.ground_truth->string();
-  } else if ((gt = loadGroundTruth(dataset))) {
+  } else if ((gt = loadDatasetGroundTruth(dataset))) {
     gt_name = dataset.ground_truth->string();
   }
   VoRunResult run = runVisualOdometryOn(*source, rig, result.config, options, gt, gt_name);
@@ -170,6 +171,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   VoRunResult result;
   result.config = config;
   if (options.mode) result.config.frontend.prior_mode = *options.mode;
+  if (options.bridge_iframes) result.config.frontend.bridge_iframes = *options.bridge_iframes;
   const std::function<bool()> stop_requested = options.pipeline.stop_requested
                                                    ? options.pipeline.stop_requested
                                                    : std::function<bool()>(platform::stopRequested);
@@ -421,6 +423,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
   j["input"] = r.description;
   j["config"] = r.config_name;
   j["mode"] = std::string(priorModeName(r.config.frontend.prior_mode));
+  j["bridge_iframes"] = r.config.frontend.bridge_iframes;
   j["has_motion"] = r.has_motion;
   j["decoder"] = r.decoder_description;
   j["image_size"] = {r.width, r.height};

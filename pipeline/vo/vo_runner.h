@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/dataset/dataset.h"
 #include "drivers/decode/backend.h"
 #include "drivers/source/stereo_source.h"
 #include "pipeline/runtime/runner.h"
@@ -32,6 +33,7 @@ struct VoRunOptions {
   std::optional<std::filesystem::path> config;        // file or shipped name; default: euroc (kitti for KITTI folders)
   std::optional<std::filesystem::path> ground_truth;  // overrides the dataset's own
   std::optional<PriorMode> mode;                      // overrides the config's frontend.prior_mode
+  std::optional<bool> bridge_iframes;                 // overrides the config's frontend.bridge_iframes
   std::int64_t encode_bitrate_bps = 0;  // raw datasets: encode (two-pass x264, the paper's way) to a temp folder first
   int max_frames = 0;                   // 0 = all
   int max_points = 1000;                // frontend capacity per camera
@@ -81,6 +83,9 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested);
 
+// The dataset's own ground truth (KITTI poses with their times.txt), if it has one.
+std::optional<Trajectory> loadDatasetGroundTruth(const Dataset& dataset);
+
 // Throws InputError for bad input found before the run starts (missing dataset, calibration or
 // config; images that do not match the calibration). A stage failing during the run does not throw:
 // the result carries it in pipeline.error, with everything estimated up to then.
@@ -88,8 +93,8 @@ VoRunResult runVisualOdometry(const VoRunOptions& options);
 
 // The same on an input that is already open (a live camera, a network stream, a test's source):
 // options' input, calibration, config, ground_truth, encode_bitrate_bps and max_frames are not used;
-// its mode still overrides the config's. Does not write options.statistics_file (the caller does,
-// after adding its own warnings). ground_truth, when given, is evaluated against.
+// its mode and bridge_iframes still override the config's. Does not write options.statistics_file
+// (the caller does, after adding its own warnings). ground_truth, when given, is evaluated against.
 VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, const VocaConfig& config,
                                 const VoRunOptions& options, const std::optional<Trajectory>& ground_truth = {},
                                 const std::string& ground_truth_name = {});

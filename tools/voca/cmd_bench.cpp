@@ -1,4 +1,4 @@
-// `voca bench <mode>`: throughput measurements on this machine. Each mode is one entry of kModes
+// `voca bench <mode>`: throughput measurements on this machine, and evaluation suites. Each mode is one entry of kModes
 // below (a name, a summary and a configure function declaring its options), so a new mode is one
 // function plus one row.
 
@@ -19,6 +19,7 @@
 #include "tools/voca/bench_backend.h"
 #include "tools/voca/bench_frontend.h"
 #include "tools/voca/bench_pipeline.h"
+#include "tools/voca/bench_suite.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 
@@ -229,13 +230,17 @@ const std::vector<BenchMode>& benchModes() {
        voca::cli::configurePipelineBench},
       {"backend", "Estimator cost per frame on synthetic observations (7 keyframes, ~200 points)",
        voca::cli::configureBackendBench},
+      {"suite", "Evaluation suite: sequences x bitrates x modes -> the paper's tables (resumable, --jobs, cluster)",
+       voca::cli::configureSuiteBench},
+      {"collect", "Tables from a suite folder whose runs ran elsewhere (--emit-jobs on a cluster)",
+       voca::cli::configureCollectBench},
   };
   return modes;
 }
 
 const bool registered = voca::cli::registerCommand({
     .name = "bench",
-    .summary = "Measure throughput of pipeline stages on this machine",
+    .summary = "Measure throughput of pipeline stages, or run evaluation suites for the paper's tables",
     .order = 70,
     .configure = [](CLI::App& app) -> Runner {
       app.require_subcommand(1);

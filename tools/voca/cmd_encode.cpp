@@ -10,6 +10,7 @@
 
 #include <fmt/core.h>
 
+#include "drivers/decode/decoded_dataset.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
@@ -24,6 +25,7 @@ struct EncodeOptions {
   std::string cameras = "0,1";
   std::string codec = "libx264";
   std::string calib;
+  std::string decoded_png;
   bool single_pass = false;
   int threads = 1;
 };
@@ -91,7 +93,6 @@ int runEncode(const EncodeOptions& cli) {
                    percent);
         if (frame + 1 == frames) fmt::print(stderr, "\n");
       });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   for (const std::string& warning : report.warnings) fmt::print(stderr, "warning: {}\n", warning);
   fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
@@ -125,7 +126,18 @@ int runEncode(const EncodeOptions& cli) {
              static_cast<double>(report.raw_bytes) / static_cast<double>(report.output_bytes));
   if (report.ground_truth_written) fmt::print("ground truth -> {}\n", report.ground_truth_written->string());
   if (report.calibration_written) fmt::print("calibration  -> {}\n", report.calibration_written->string());
-  fmt::print("done in {:.1f} s\n", seconds);
+  if (!cli.decoded_png.empty()) {
+    if (options.cameras.size() != 2) throw voca::InputError("--decoded-png needs both cameras (--cameras 0,1)");
+    const voca::decode::DecodedDatasetReport decoded =
+        voca::decode::writeDecodedEuroc(cli.out, cli.decoded_png, [](std::int64_t done, std::int64_t total) {
+          if (done % 50 == 0 || done == total) fmt::print(stderr, "\rdecoding to PNG: frame {}/{}   ", done, total);
+          if (done == total) fmt::print(stderr, "\n");
+        });
+    fmt::print("decoded    {} frames ({}x{}) as a EuRoC folder -> {}{}\n", decoded.frames, decoded.width,
+               decoded.height, cli.decoded_png,
+               decoded.calibration_copied ? " (with calib.json and ground truth)" : "");
+  }
+  fmt::print("done in {:.1f} s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return 0;
 }
 
@@ -158,6 +170,9 @@ const bool registered = voca::cli::registerCommand(
        app.add_option("--calib", options->calib,
                       "Calibration to write as <out>/calib.json (Basalt .json, Kalibr .yaml, KITTI calib.txt); "
                       "default: the one found with the dataset");
+       app.add_option("--decoded-png", options->decoded_png,
+                      "Also decode the new videos into this EuRoC folder (PNG frames, data.csv, ground truth, "
+                      "calib.json): exactly the pixels VOCA-RT sees, for running other systems on the same input");
        app.add_flag("--single-pass", options->single_pass, "One-pass rate control (faster, less exact bitrate)");
        app.add_option("--threads", options->threads,
                       "Encoder threads; 0 = automatic (faster, but x264's output then depends on the core count)")

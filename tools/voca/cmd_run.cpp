@@ -17,7 +17,7 @@ namespace {
 using voca::cli::Runner;
 
 struct RunOptions {
-  std::string input, calib, config, mode, encode, out, gt, format = "tum";
+  std::string input, calib, config, mode, bridge, encode, out, gt, format = "tum";
   int frames = 0;
   int max_points = 1000;
   voca::cli::PipelineCli pipeline;
@@ -30,6 +30,7 @@ int runRun(const RunOptions& o) {
   if (!o.config.empty()) options.config = o.config;
   if (!o.gt.empty()) options.ground_truth = o.gt;
   if (!o.mode.empty()) options.mode = voca::requirePriorMode(o.mode, "--mode");
+  if (!o.bridge.empty()) options.bridge_iframes = o.bridge == "on";
   if (!o.encode.empty()) options.encode_bitrate_bps = voca::encode::parseBitrate(o.encode);
   if (o.frames < 0) throw voca::InputError("--frames: expected 0 (all) or a positive count");
   options.max_frames = o.frames;
@@ -58,6 +59,9 @@ const bool registered = voca::cli::registerCommand({
                      "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for "
                      "KITTI folders)");
       app.add_option("--mode", o->mode, "Prior mode: " + voca::priorModeList() + " (overrides the config)");
+      app.add_option("--bridge", o->bridge,
+                     "I-frame bridging: on (reuse the last P-frame's motion on I-frames) or off (overrides the config)")
+          ->check(CLI::IsMember({"on", "off"}));
       app.add_option("--encode", o->encode,
                      "Raw datasets: encode at this bitrate (e.g. 500k) to a temporary VOCA folder first");
       app.add_option("--out,-o", o->out, "Trajectory file to write (one row per frame, flushed as estimated)")

@@ -1,0 +1,70 @@
+#include "platform/process/child_process.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <system_error>
+
+#include <fmt/core.h>
+
+#include "voca/core/error.h"
+
+extern char** environ;
+
+namespace voca::platform {
+
+pid_t startChild(const std::vector<std::string>& argv, const std::filesystem::path& log_file) {
+  if (argv.empty()) throw RuntimeFailure("startChild: empty command");
+  std::vector<char*> args;
+  for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
+  args.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_file.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid = -1;
+  const int error = argv[0].find('/') == std::string::npos
+                        ? posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ)
+                        : posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (error != 0) {
+    throw RuntimeFailure(fmt::format("cannot start {} (log {}): {}", argv[0], log_file.string(), std::strerror(error)));
+  }
+  return pid;
+}
+
+ChildExit waitForAnyChild() {
+  int status = 0;
+  pid_t pid = -1;
+  do {
+    pid = ::waitpid(-1, &status, 0);
+  } while (pid < 0 && errno == EINTR);
+  if (pid < 0) throw RuntimeFailure(fmt::format("waiting for a child process: {}", std::strerror(errno)));
+  ChildExit exit;
+  exit.pid = pid;
+  if (WIFEXITED(status)) {
+    exit.exit_code = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    exit.signal = WTERMSIG(status);
+  }
+  return exit;
+}
+
+std::filesystem::path currentExecutable(const std::string& argv0) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  return error ? std::filesystem::path(argv0) : self;
+}
+
+std::string describeExit(const ChildExit& exit) {
+  if (exit.signal != 0) return fmt::format("killed by signal {} ({})", exit.signal, ::strsignal(exit.signal));
+  return fmt::format("exit code {}", exit.exit_code);
+}
+
+}  // namespace voca::platform

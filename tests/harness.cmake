@@ -1,0 +1,10 @@
+# The evaluation harness (`voca bench suite` / `collect`): suite files, plans and tables without running
+# anything; then the harness end to end through the `voca` binary, and the shipped default suite.
+voca_add_test(test_harness SOURCES test_harness.cpp LIBS voca_harness LABELS asan)
+voca_add_test(test_bench_suite_e2e SOURCES test_bench_suite_e2e.cpp LIBS nlohmann_json::nlohmann_json LABELS e2e
+              TIMEOUT 900)
+target_compile_definitions(test_bench_suite_e2e PRIVATE VOCA_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+add_dependencies(test_bench_suite_e2e voca)
+# The plots of a suite (tools/plot_suite.py) on a hand-made suite folder; needs python3-matplotlib.
+add_test(NAME test_plot_suite COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_plot_suite.py)
+set_tests_properties(test_plot_suite PROPERTIES LABELS tools TIMEOUT 120)

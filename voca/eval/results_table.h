@@ -1,0 +1,90 @@
+#pragma once
+// The paper's result tables (DESIGN.md section 7) as plain data: per-sequence ATE and RTE of several
+// systems with the failure rules (infinity for divergence, x for crashes, R for resets), AVG over the
+// sequences no system failed, MED with failures as infinity, success rate, best and second best.
+// Rendering (Markdown, CSV, LaTeX) lives with the tools; this is only the arithmetic.
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace voca {
+
+// What became of one run of one system on one sequence.
+enum class RunOutcome {
+  kCompleted,  // produced a trajectory that was evaluated
+  kCrashed,    // crashed, failed or stopped before the end: shown as x
+};
+
+// One run's measurements. ate_m / rte_m are RMSEs in metres; rte_m is empty when the trajectory was
+// too short for one relative pair. reset_free_fraction is the longest stretch of the expected frames
+// estimated without a reset or a gap (1 = the whole sequence in one piece).
+struct RunMetrics {
+  RunOutcome outcome = RunOutcome::kCompleted;
+  double ate_m = 0.0;
+  std::optional<double> rte_m;
+  double reset_free_fraction = 1.0;
+};
+
+// The paper's thresholds (Table 1; use ate_divergence_m = 1 for small rooms such as the Monado set).
+struct TableRules {
+  double ate_divergence_m = 10.0;
+  double rte_divergence_m = 0.10;
+  double min_reset_free_fraction = 0.5;  // R when the longest reset-free stretch is at most this
+};
+
+enum class TableMetric { kAte = 0, kRte = 1 };
+inline constexpr std::size_t kNumTableMetrics = 2;
+
+// How a cell is shown.
+enum class CellKind {
+  kValue,       // a number (metres)
+  kDivergent,   // infinity
+  kCrashed,     // x
+  kReset,       // R
+  kMissing,     // no result (not run yet)
+  kNotDefined,  // an aggregate over nothing (AVG when every sequence is greyed)
+};
+
+struct TableCell {
+  CellKind kind = CellKind::kMissing;
+  double value = 0.0;  // metres for kValue
+  int rank = 0;        // 1 = best of its row (bold), 2 = second (underlined), 0 = neither
+};
+
+// A system (a column group of the paper's tables): a VOCA-RT mode or an external system.
+struct TableSystem {
+  std::string name;
+  // Whether its failures grey out a sequence, per metric. The paper leaves out systems that give no
+  // reasonable values at all (MoV-SLAM; ORB-SLAM3's RTE), so that one system does not empty the AVG.
+  std::array<bool, kNumTableMetrics> counts_for_avg{true, true};
+};
+
+// The table: cells[metric][sequence][system], aggregates[metric][system].
+struct ResultsTable {
+  std::vector<TableSystem> systems;
+  std::vector<std::string> sequences;
+  std::array<std::vector<std::vector<TableCell>>, kNumTableMetrics> cells;
+  std::vector<bool> greyed;  // per sequence: some counted system failed on it (left out of AVG)
+  std::array<std::vector<TableCell>, kNumTableMetrics> average;
+  std::array<std::vector<TableCell>, kNumTableMetrics> median;
+  std::array<std::vector<double>, kNumTableMetrics> success_rate;  // 0..1: cells that are kValue
+  std::array<std::vector<int>, kNumTableMetrics> success_rank;     // 1 best, 2 second (highest rate)
+};
+
+// The cell one run gets under the rules: divergence beats R, R beats a value.
+TableCell classifyRun(const std::optional<RunMetrics>& run, TableMetric metric, const TableRules& rules);
+
+// runs[sequence][system]: empty optionals are runs without a result. Throws std::invalid_argument when
+// the shape does not match the names.
+ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std::string> sequences,
+                               const std::vector<std::vector<std::optional<RunMetrics>>>& runs,
+                               const TableRules& rules = {});
+
+// Marks the lowest value of a row rank 1 (all ties) and the next distinct value rank 2; failures and
+// missing cells are not ranked. Nothing is ranked when fewer than two cells hold values.
+void rankRow(std::vector<TableCell*> row);
+
+}  // namespace voca
