@@ -369,8 +369,9 @@ TEST_CASE("voca run on a stream with lost datagrams finishes, counts the loss an
   const int relay_port = freeUdpPort();
   const int receive_port = freeUdpPort();
   REQUIRE(relay_port != receive_port);
-  // Two bursts, around frames 15 and 40 of 60 (about 9 datagrams per stereo frame at 800 kbit/s).
-  LossyRelay relay(relay_port, receive_port, {140, 141, 142, 360, 361});
+  // Two bursts, around frames 10 and 25 of 60 (about 9 datagrams per stereo frame at 800 kbit/s),
+  // each healed by the next keyframe (frames 20 and 40).
+  LossyRelay relay(relay_port, receive_port, {90, 91, 92, 230, 231});
 
   int run_status = -1;
   std::thread receiver([&] {

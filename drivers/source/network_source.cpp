@@ -78,6 +78,7 @@ struct NetworkStereoSource::Impl {
   std::atomic<std::int64_t> deadline_ns{0};
   std::atomic<bool>* interrupted = nullptr;
   std::int64_t last_index = -1;  // the sender's frame index of the last pair handed on
+  std::int64_t max_index = -1;   // the highest frame index that arrived from either camera
   std::int64_t pairs_out = 0;
 
   static int interruptCallback(void* opaque) {
@@ -238,6 +239,10 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
     av_packet_unref(s.packet);
     const int r = av_read_frame(s.format, s.packet);
     if (r < 0) {
+      // Frames that arrived after the last pair handed on (waiting for a keyframe or a partner)
+      // are lost too.
+      if (s.last_index >= 0 && s.max_index > s.last_index) frames_lost_ += s.max_index - s.last_index;
+      s.max_index = s.last_index;
       if (interrupted_) {
         end_reason_ = "interrupted";
       } else if (r == AVERROR_EXIT) {
@@ -259,6 +264,7 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
     // Damaged (TS packets lost inside it) or unstamped: unusable; the gap it leaves is counted when
     // the next pair goes out. Stale (older than what was handed on): late or duplicated.
     if ((s.packet->flags & AV_PKT_FLAG_CORRUPT) != 0 || !stamp || stamp->frame_index <= s.last_index) continue;
+    s.max_index = std::max(s.max_index, stamp->frame_index);
     PendingRing& ring = s.pending[camera];
     if (ring.full()) {  // the other camera has been silent for kPendingDepth frames
       ring.pop();
