@@ -83,6 +83,7 @@ struct NetworkStereoSource::Impl {
 
   static int interruptCallback(void* opaque) {
     const auto* self = static_cast<const Impl*>(opaque);
+    if (self->options.stop_requested && self->options.stop_requested()) self->interrupted->store(true);
     return (self->interrupted->load() || nowNs() > self->deadline_ns.load()) ? 1 : 0;
   }
   void armDeadline(double seconds) { deadline_ns = nowNs() + static_cast<std::int64_t>(seconds * 1e9); }

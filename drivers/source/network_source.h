@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -23,6 +24,8 @@ namespace voca {
 struct NetworkSourceOptions {
   double start_timeout_s = 30.0;  // waiting for the stream to begin
   double timeout_s = 3.0;         // no data for this long once started = the sender has stopped
+  // Polled while waiting (e.g. SIGINT): true ends the wait like interrupt() does.
+  std::function<bool()> stop_requested;
 };
 
 // True for input names libavformat opens as a network stream (udp://, tcp://, rtp://, srt://, ...).

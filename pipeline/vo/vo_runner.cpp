@@ -120,10 +120,22 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   NetworkSourceOptions network;
   network.start_timeout_s = options.stream_start_timeout_s;
   network.timeout_s = options.stream_timeout_s;
+  network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
+                                                           : std::function<bool()>(platform::stopRequested);
   if (options.progress) {
     fmt::print(stderr, "waiting for the stream on {} (up to {} s)\n", url, options.stream_start_timeout_s);
   }
-  NetworkStereoSource source(url, network);
+  std::optional<NetworkStereoSource> opened;
+  try {
+    opened.emplace(url, network);
+  } catch (const InputError&) {
+    if (!network.stop_requested()) throw;
+    VoRunResult stopped;  // Ctrl-C while waiting for the stream: a clean stop, nothing estimated
+    stopped.description = fmt::format("{} (stopped while waiting for the stream)", url);
+    stopped.stop_signal = platform::stopSignal();
+    return stopped;
+  }
+  NetworkStereoSource& source = *opened;
   VoRunResult run = runVisualOdometryOn(source, rig, config, options, gt,
                                         options.ground_truth ? options.ground_truth->string() : std::string());
   run.config_name = options.config ? options.config->string() : "euroc (built in)";
