@@ -10,3 +10,7 @@ voca_add_test(test_decode_alloc SOURCES test_decode_alloc.cpp LIBS voca_drivers_
 # formats) are refused by name; tiny clips made in the test with libavcodec.
 voca_add_test(test_decode_structure SOURCES test_decode_structure.cpp LIBS voca_drivers_decode PkgConfig::FFMPEG
               LABELS asan)
+# Hardware pixels + software vectors paired by pts, with a stand-in pixel decoder that reorders and
+# drops; the V4L2 M2M probe's capability rule.
+voca_add_test(test_decode_pairing SOURCES test_decode_pairing.cpp LIBS voca_drivers_decode voca_drivers_encode
+              voca_platform_v4l2 PkgConfig::FFMPEG)

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "drivers/decode/ffmpeg_util.h"
+#include "platform/v4l2/m2m_devices.h"
 #include "voca/core/error.h"
 
 extern "C" {
@@ -104,6 +105,20 @@ AVCodecID avCodecId(VideoCodec codec) {
   return AV_CODEC_ID_NONE;
 }
 
+std::uint32_t v4l2Format(VideoCodec codec) {
+  switch (codec) {
+    case VideoCodec::kH264:
+      return platform::fourcc("H264");
+    case VideoCodec::kMpeg4:
+      return platform::fourcc("MPG4");
+    case VideoCodec::kMpeg2:
+      return platform::fourcc("MPG2");
+    case VideoCodec::kOther:
+      break;
+  }
+  return 0;
+}
+
 bool codecSupportsVaapi(const AVCodec* codec) {
   for (int i = 0;; ++i) {
     const AVCodecHWConfig* config = avcodec_get_hw_config(codec, i);
@@ -120,6 +135,7 @@ bool codecSupportsVaapi(const AVCodec* codec) {
 DecoderProbe systemDecoderProbe() {
   using detail::avCodecId;
   using detail::codecSupportsVaapi;
+  using detail::v4l2Format;
   using detail::v4l2m2mDecoderName;
   DecoderProbe probe;
   probe.vaapi_device_present = [](const std::string& device) {
@@ -137,11 +153,8 @@ DecoderProbe systemDecoderProbe() {
   probe.v4l2m2m_present = [](VideoCodec codec) {
     const char* name = v4l2m2mDecoderName(codec);
     if (name == nullptr || avcodec_find_decoder_by_name(name) == nullptr) return false;
-    std::error_code ec;
-    for (const auto& entry : std::filesystem::directory_iterator("/dev", ec)) {
-      if (entry.path().filename().string().rfind("video", 0) == 0) return true;
-    }
-    return false;
+    // By capabilities, not by name: a webcam is a /dev/video* too.
+    return !platform::findM2mCodecNodes(platform::M2mRole::kDecoder, v4l2Format(codec)).empty();
   };
   return probe;
 }

@@ -25,7 +25,8 @@ struct DecoderProbe {
   std::function<bool(const std::string& device)> vaapi_device_present;
   // A VAAPI device can be created on it and libavcodec can decode `codec` with it.
   std::function<bool(const std::string& device, VideoCodec codec)> vaapi_open;
-  // A V4L2 memory-to-memory decoder for `codec` is built into libavcodec and a /dev/video node exists.
+  // A V4L2 memory-to-memory decoder for `codec` is built into libavcodec and a /dev/video node is an
+  // M2M device that takes `codec` on its OUTPUT queue (VIDIOC_QUERYCAP / VIDIOC_ENUM_FMT).
   std::function<bool(VideoCodec codec)> v4l2m2m_present;
 };
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <stdexcept>
 #include <vector>
 
 #include "drivers/decode/ffmpeg_util.h"
@@ -28,6 +29,21 @@ using BufferPtr = std::unique_ptr<AVBufferRef, detail::BufferDeleter>;
 
 // The MV parse runs ahead of a hardware decoder by that decoder's internal queue depth.
 constexpr std::size_t kMotionQueueDepth = 32;
+// Parsed vectors whose picture has not come out after this many later pictures did were dropped by
+// the device (a hardware decoder reorders within its few output buffers, never further).
+constexpr int kMaxPixelReorder = 8;
+
+// A libavcodec context as the pixel decoder (software, VAAPI or V4L2 M2M).
+class CodecPixelDecoder final : public PixelDecoder {
+ public:
+  explicit CodecPixelDecoder(CodecPtr ctx) : ctx_(std::move(ctx)) {}
+  int send(const AVPacket* packet) override { return avcodec_send_packet(ctx_.get(), packet); }
+  int receive(AVFrame* frame) override { return avcodec_receive_frame(ctx_.get(), frame); }
+  const AVCodecContext* context() const { return ctx_.get(); }
+
+ private:
+  CodecPtr ctx_;
+};
 
 void logChoiceOnce(const std::string& line) {
   static std::mutex mutex;
@@ -81,13 +97,23 @@ struct VideoDecoder::Impl {
   DecoderOptions options;
   std::string source;
   BackendChoice choice;
-  CodecPtr pixel;   // produces the output frames (software, or the hardware decoder)
-  CodecPtr motion;  // hardware backends only: software parse for the motion vectors
+  const AVCodecContext* pixel_context = nullptr;  // the libavcodec pixel decoder, if pixel is one
+  std::unique_ptr<PixelDecoder> pixel;            // produces the output frames (software, or the hardware decoder)
+  CodecPtr motion;                                // hardware backends only: software parse for the motion vectors
   BufferPtr hw_device;
   FramePtr frame, transfer;
   PacketPtr packet;
-  std::vector<FramePtr> motion_queue;  // ring of parsed MV frames waiting for their pixels
-  std::size_t queue_head = 0, queue_size = 0;
+  // Parsed MV frames waiting for their pixels, matched by pts (a fixed set of slots: no allocation).
+  struct MotionSlot {
+    FramePtr frame;
+    bool waiting = false;
+    std::int64_t arrival = 0;  // parse order, for pictures without pts
+    int passed = 0;            // later pictures that came out before this one
+  };
+  std::vector<MotionSlot> motion_slots;
+  std::size_t motion_waiting = 0;
+  std::int64_t motion_parsed = 0;
+  std::int64_t pixel_dropped = 0;
   std::int64_t frames_out = 0;
   std::int64_t last_packet = -1;
   bool format_checked = false;
@@ -97,8 +123,15 @@ struct VideoDecoder::Impl {
   CodecPtr openVaapi();
   CodecPtr openV4l2m2m() const;
   void open(DecoderBackend backend);
-  void sendTo(AVCodecContext* ctx, const AVPacket* pkt, std::int64_t index);
+  void checkSend(int rc, const AVPacket* pkt, std::int64_t index);
   void drainMotion();
+  void allocMotionSlots();
+  void usePixel(CodecPtr ctx) {
+    auto decoder = std::make_unique<CodecPixelDecoder>(std::move(ctx));
+    pixel_context = decoder->context();
+    pixel = std::move(decoder);
+  }
+  const AVFrame* takeMotionFor(const AVFrame& pixels);
   void fail(int rc, const std::string& what) const;
   void convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out);
   void refuseUnusableStructure(const AVFrame& parsed);
@@ -113,7 +146,8 @@ struct VideoDecoder::Impl {
 //  - other bit depths or chroma layouts: the pixel path copies an 8-bit luma plane.
 // `parsed` is the software parse of the picture (the same frame for software decoding).
 void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
-  const AVCodecContext& ctx = motion ? *motion : *pixel;
+  if (!motion && pixel_context == nullptr) return;  // an external pixel decoder with no parse beside it
+  const AVCodecContext& ctx = motion ? *motion : *pixel_context;
   if (parsed.pict_type == AV_PICTURE_TYPE_B) {
     throw InputError(source + ": frame " + std::to_string(frames_out) +
                      " is a B-frame; VOCA needs a causal stream without B-frames (x264: bframes=0)");
@@ -234,32 +268,37 @@ CodecPtr VideoDecoder::Impl::openV4l2m2m() const {
 
 void VideoDecoder::Impl::open(DecoderBackend backend) {
   pixel.reset();
+  pixel_context = nullptr;
   motion.reset();
   hw_device.reset();
   if (!options.decode_pixels) {
     // An MV-only parse is software by nature: hardware would make pixels nobody reads.
-    pixel = openSoftware(true);
+    usePixel(openSoftware(true));
     return;
   }
   switch (backend) {
     case DecoderBackend::kVaapi:
-      pixel = openVaapi();
+      usePixel(openVaapi());
       break;
     case DecoderBackend::kV4l2m2m:
-      pixel = openV4l2m2m();
+      usePixel(openV4l2m2m());
       break;
     default:
-      pixel = openSoftware(false);
+      usePixel(openSoftware(false));
       return;
   }
-  if (options.export_motion) {
-    motion = openSoftware(true);
-    motion_queue.clear();
-    for (std::size_t i = 0; i < kMotionQueueDepth; ++i) {
-      motion_queue.emplace_back(av_frame_alloc());
-      if (!motion_queue.back()) throw RuntimeFailure("out of memory allocating frames");
-    }
+  if (options.export_motion) allocMotionSlots();
+}
+
+void VideoDecoder::Impl::allocMotionSlots() {
+  motion = openSoftware(true);
+  motion_slots.clear();
+  motion_slots.resize(kMotionQueueDepth);
+  for (MotionSlot& slot : motion_slots) {
+    slot.frame.reset(av_frame_alloc());
+    if (!slot.frame) throw RuntimeFailure("out of memory allocating frames");
   }
+  motion_waiting = 0;
 }
 
 VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& options, const DecoderProbe* probe,
@@ -298,14 +337,41 @@ VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& optio
   if (options.log_choice) logChoiceOnce(d.choice.description);
 }
 
+VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& options,
+                           std::unique_ptr<PixelDecoder> pixels, std::string source_name)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.stream = stream;
+  d.options = options;
+  d.source = std::move(source_name);
+  if (!pixels) throw std::invalid_argument("VideoDecoder: null pixel decoder");
+  if (stream.codec == VideoCodec::kOther) {
+    throw InputError(d.source + ": codec '" + stream.codec_name + "' is not supported (H.264, MPEG-4 Part 2, MPEG-2)");
+  }
+  d.frame.reset(av_frame_alloc());
+  d.transfer.reset(av_frame_alloc());
+  d.packet.reset(av_packet_alloc());
+  if (!d.frame || !d.transfer || !d.packet) throw RuntimeFailure("out of memory allocating decoder buffers");
+  d.options.decode_pixels = true;
+  // Reported as hardware: that is what the stand-in stands for.
+  d.choice.backend = options.backend == DecoderBackend::kAuto || options.backend == DecoderBackend::kSoftware
+                         ? DecoderBackend::kV4l2m2m
+                         : options.backend;
+  d.choice.description =
+      std::string("decoder: external pixel decoder") + (options.export_motion ? " (+ software MV parse)" : "");
+  d.pixel = std::move(pixels);
+  if (options.export_motion) d.allocMotionSlots();
+}
+
 VideoDecoder::~VideoDecoder() = default;
+
+std::int64_t VideoDecoder::pixelFramesDropped() const { return impl_->pixel_dropped; }
 
 DecoderBackend VideoDecoder::backend() const { return impl_->choice.backend; }
 const std::string& VideoDecoder::description() const { return impl_->choice.description; }
 const StreamInfo& VideoDecoder::stream() const { return impl_->stream; }
 
-void VideoDecoder::Impl::sendTo(AVCodecContext* ctx, const AVPacket* pkt, std::int64_t index) {
-  const int rc = avcodec_send_packet(ctx, pkt);
+void VideoDecoder::Impl::checkSend(int rc, const AVPacket* pkt, std::int64_t index) {
   if (rc == 0 || rc == AVERROR_EOF) return;
   if (rc == AVERROR(EAGAIN)) {
     throw RuntimeFailure(source + ": decoder refused packet " + std::to_string(index) +
@@ -316,17 +382,50 @@ void VideoDecoder::Impl::sendTo(AVCodecContext* ctx, const AVPacket* pkt, std::i
 
 void VideoDecoder::Impl::drainMotion() {
   while (true) {
-    if (queue_size == motion_queue.size()) {
+    auto free_slot =
+        std::find_if(motion_slots.begin(), motion_slots.end(), [](const MotionSlot& s) { return !s.waiting; });
+    if (free_slot == motion_slots.end()) {
       throw RuntimeFailure(source + ": the hardware decoder fell more than " + std::to_string(kMotionQueueDepth) +
                            " frames behind the motion-vector parse");
     }
-    AVFrame* slot = motion_queue[(queue_head + queue_size) % motion_queue.size()].get();
+    AVFrame* slot = free_slot->frame.get();
     av_frame_unref(slot);
     const int rc = avcodec_receive_frame(motion.get(), slot);
     if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
     if (rc < 0) fail(rc, "in the motion-vector parse near packet " + std::to_string(last_packet));
-    ++queue_size;
+    free_slot->waiting = true;
+    free_slot->arrival = motion_parsed++;
+    free_slot->passed = 0;
+    ++motion_waiting;
   }
+}
+
+// The parsed vectors of the picture `pixels`: the waiting slot with its pts (the oldest one when the
+// device gives no pts). Slots passed over by more than kMaxPixelReorder later pictures are given up
+// as pictures the device dropped. The returned frame stays valid until the next drainMotion().
+const AVFrame* VideoDecoder::Impl::takeMotionFor(const AVFrame& pixels) {
+  if (motion_waiting == 0) drainMotion();
+  MotionSlot* match = nullptr;
+  for (MotionSlot& slot : motion_slots) {
+    if (!slot.waiting) continue;
+    const bool by_order = pixels.pts == AV_NOPTS_VALUE || slot.frame->pts == AV_NOPTS_VALUE;
+    if (by_order ? (match == nullptr || slot.arrival < match->arrival) : slot.frame->pts == pixels.pts) match = &slot;
+  }
+  if (match == nullptr) {
+    throw RuntimeFailure(source + ": frame " + std::to_string(frames_out) +
+                         ": no motion-vector parse for its pts (hardware and software decoders out of step)");
+  }
+  match->waiting = false;
+  --motion_waiting;
+  for (MotionSlot& slot : motion_slots) {
+    if (!slot.waiting || slot.arrival > match->arrival) continue;
+    if (++slot.passed > kMaxPixelReorder) {
+      slot.waiting = false;
+      --motion_waiting;
+      ++pixel_dropped;
+    }
+  }
+  return match->frame.get();
 }
 
 void VideoDecoder::send(const Packet& packet) {
@@ -344,10 +443,10 @@ void VideoDecoder::send(const Packet& packet) {
   d.last_packet = packet.index;
   if (d.motion) {
     d.drainMotion();
-    d.sendTo(d.motion.get(), pkt, packet.index);
+    d.checkSend(avcodec_send_packet(d.motion.get(), pkt), pkt, packet.index);
     d.drainMotion();
   }
-  d.sendTo(d.pixel.get(), pkt, packet.index);
+  d.checkSend(d.pixel->send(pkt), pkt, packet.index);
   pkt->data = nullptr;
   pkt->size = 0;
 }
@@ -356,10 +455,10 @@ void VideoDecoder::sendEnd() {
   Impl& d = *impl_;
   if (d.motion) {
     d.drainMotion();
-    d.sendTo(d.motion.get(), nullptr, d.last_packet + 1);
+    d.checkSend(avcodec_send_packet(d.motion.get(), nullptr), nullptr, d.last_packet + 1);
     d.drainMotion();
   }
-  d.sendTo(d.pixel.get(), nullptr, d.last_packet + 1);
+  d.checkSend(d.pixel->send(nullptr), nullptr, d.last_packet + 1);
 }
 
 void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
@@ -427,7 +526,7 @@ bool VideoDecoder::receive(DecodedFrame& out) {
   Impl& d = *impl_;
   AVFrame* frame = d.frame.get();
   av_frame_unref(frame);
-  const int rc = avcodec_receive_frame(d.pixel.get(), frame);
+  const int rc = d.pixel->receive(frame);
   if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return false;
   if (rc < 0) d.fail(rc, "decoding frame " + std::to_string(d.frames_out));
   const bool damaged = frame->decode_error_flags != 0 || (frame->flags & AV_FRAME_FLAG_CORRUPT) != 0;
@@ -436,20 +535,7 @@ bool VideoDecoder::receive(DecodedFrame& out) {
                      " is corrupt (damaged or missing bitstream data)");
   }
   const AVFrame* vectors = frame;
-  if (d.motion) {
-    if (d.queue_size == 0) d.drainMotion();
-    if (d.queue_size == 0) {
-      throw RuntimeFailure(d.source + ": frame " + std::to_string(d.frames_out) +
-                           " came out of the hardware decoder before its motion-vector parse");
-    }
-    vectors = d.motion_queue[d.queue_head].get();
-    if (vectors->pts != AV_NOPTS_VALUE && frame->pts != AV_NOPTS_VALUE && vectors->pts != frame->pts) {
-      throw RuntimeFailure(d.source + ": frame " + std::to_string(d.frames_out) +
-                           ": hardware and motion-vector decoders are out of step");
-    }
-    d.queue_head = (d.queue_head + 1) % d.motion_queue.size();
-    --d.queue_size;
-  }
+  if (d.motion) vectors = d.takeMotionFor(*frame);
   d.refuseUnusableStructure(*vectors);
   d.convert(*frame, *vectors, out);
   out.damaged = damaged;

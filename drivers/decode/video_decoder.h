@@ -7,6 +7,7 @@
 
 #include "drivers/decode/backend.h"
 #include "drivers/decode/demuxer.h"
+#include "drivers/decode/pixel_decoder.h"
 #include "voca/core/image.h"
 #include "voca/motion/motion_field.h"
 
@@ -41,13 +42,19 @@ struct DecoderOptions {
 
 // Decodes one video stream on the calling thread. Software decoding uses one thread and no frame
 // threading (frame threading adds a frame of latency and reorders side data); hardware backends
-// decode the pixels while a software context parses the same packets for the motion vectors.
+// decode the pixels while a software context parses the same packets for the motion vectors; each
+// picture is paired with its vectors by pts, so a device that returns pictures out of order or drops
+// one still gets the right vectors on every picture it returns.
 // Errors throw voca::InputError (corrupt data, naming the packet/frame) or voca::RuntimeFailure.
 class VideoDecoder {
  public:
   // probe: how to discover devices; nullptr = systemDecoderProbe(). source_name appears in errors.
   VideoDecoder(const StreamInfo& stream, const DecoderOptions& options, const DecoderProbe* probe = nullptr,
                std::string source_name = "video");
+  // Pixels from `pixels` (standing in for a hardware decoder: tests, or a device libavcodec does not
+  // wrap), vectors from a software parse of the same packets, paired by pts as for VAAPI / V4L2 M2M.
+  VideoDecoder(const StreamInfo& stream, const DecoderOptions& options, std::unique_ptr<PixelDecoder> pixels,
+               std::string source_name);
   ~VideoDecoder();
   VideoDecoder(const VideoDecoder&) = delete;
   VideoDecoder& operator=(const VideoDecoder&) = delete;
@@ -60,6 +67,9 @@ class VideoDecoder {
   bool receive(DecodedFrame& frame);
 
   DecoderBackend backend() const;
+  // Hardware backends: pictures the pixel decoder never returned (their vectors were parsed, then
+  // given up once later pictures had come out); the frame is missing from the output, not wrong.
+  std::int64_t pixelFramesDropped() const;
   const std::string& description() const;  // "decoder: software", "decoder: vaapi (+ software MV parse)"
   const StreamInfo& stream() const;
 

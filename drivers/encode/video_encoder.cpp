@@ -18,6 +18,7 @@ extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
 #include <libavutil/error.h>
+#include <libavutil/hwcontext.h>
 #include <libavutil/log.h>
 #include <libavutil/mem.h>
 #include <libavutil/opt.h>
@@ -30,7 +31,8 @@ namespace voca::encode {
 
 namespace {
 
-constexpr std::array<std::string_view, 3> kSupportedCodecs = {"libx264", "mpeg4", "mpeg2video"};
+constexpr std::array<std::string_view, 5> kSupportedCodecs = {"libx264", "mpeg4", "mpeg2video", "h264_v4l2m2m",
+                                                              "h264_vaapi"};
 
 std::string avError(int code) {
   std::array<char, AV_ERROR_MAX_STRING_SIZE> text{};
@@ -50,6 +52,10 @@ struct FrameDeleter {
 struct PacketDeleter {
   void operator()(AVPacket* packet) const { av_packet_free(&packet); }
 };
+struct BufferDeleter {
+  void operator()(AVBufferRef* buffer) const { av_buffer_unref(&buffer); }
+};
+using BufferPtr = std::unique_ptr<AVBufferRef, BufferDeleter>;
 using CodecContextPtr = std::unique_ptr<AVCodecContext, CodecContextDeleter>;
 using FramePtr = std::unique_ptr<AVFrame, FrameDeleter>;
 using PacketPtr = std::unique_ptr<AVPacket, PacketDeleter>;
@@ -78,6 +84,52 @@ std::string withReproducibleX264Asm(const std::string& params) {
   }
 #endif
   return params;
+}
+
+// Gray has no colour: chroma at 128 in every chroma plane (U and V planes of yuv420p, or the
+// interleaved UV plane of nv12, which is as wide as the luma in bytes).
+void fillNeutralChroma(AVFrame& frame) {
+  if (frame.format != AV_PIX_FMT_NV12 && frame.format != AV_PIX_FMT_YUV420P) return;  // gray: no chroma
+  const bool interleaved = frame.format == AV_PIX_FMT_NV12;
+  const int planes = interleaved ? 2 : 3;
+  const int chroma_width = (frame.width + 1) / 2;
+  const int chroma_bytes = interleaved ? 2 * chroma_width : chroma_width;
+  for (int plane = 1; plane < planes; ++plane) {
+    for (int y = 0; y < (frame.height + 1) / 2; ++y) {
+      std::memset(frame.data[plane] + static_cast<std::ptrdiff_t>(y) * frame.linesize[plane], 128,
+                  static_cast<std::size_t>(chroma_bytes));
+    }
+  }
+}
+
+}  // namespace
+
+bool isHardwareEncoder(std::string_view codec) { return codec == "h264_v4l2m2m" || codec == "h264_vaapi"; }
+
+namespace {
+
+BufferPtr createVaapiDevice(const std::string& device) {
+  AVBufferRef* ref = nullptr;
+  if (const int r = av_hwdevice_ctx_create(&ref, AV_HWDEVICE_TYPE_VAAPI, device.c_str(), nullptr, 0); r < 0) {
+    throw RuntimeFailure(fmt::format("cannot open the VAAPI device {}: {}", device, avError(r)));
+  }
+  return BufferPtr(ref);
+}
+
+// The pool of GPU surfaces the encoder reads: nv12 in memory, a few in flight.
+BufferPtr createVaapiFrames(AVBufferRef* device, int width, int height) {
+  BufferPtr frames(av_hwframe_ctx_alloc(device));
+  if (!frames) throw RuntimeFailure("out of memory allocating VAAPI frames");
+  auto* desc = reinterpret_cast<AVHWFramesContext*>(frames->data);
+  desc->format = AV_PIX_FMT_VAAPI;
+  desc->sw_format = AV_PIX_FMT_NV12;
+  desc->width = width;
+  desc->height = height;
+  desc->initial_pool_size = 8;
+  if (const int r = av_hwframe_ctx_init(frames.get()); r < 0) {
+    throw RuntimeFailure(fmt::format("cannot create {}x{} VAAPI surfaces: {}", width, height, avError(r)));
+  }
+  return frames;
 }
 
 }  // namespace
@@ -122,7 +174,9 @@ struct VideoEncoder::Impl {
   std::filesystem::path stats_file;
   std::string stats;  // mpeg4/mpeg2video first pass: accumulated rate-control lines
   CodecContextPtr ctx;
-  FramePtr frame;
+  FramePtr frame;     // the gray frame in the codec's software format
+  FramePtr hw_frame;  // VAAPI: the GPU surface frame is uploaded to
+  BufferPtr hw_device, hw_frames;
   PacketPtr packet;
   int input_width = 0, input_height = 0;
   std::vector<EncodedPacket> packets;  // grows to the largest burst, then reused
@@ -155,12 +209,21 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
                         const std::filesystem::path& stats_file) {
   Impl& s = *impl_;
   s.ctx.reset();
+  s.hw_frame.reset();
+  s.hw_frames.reset();
+  s.hw_device.reset();
   s.flushed = false;
   s.stats.clear();
   s.num_packets = 0;
 
   if (std::find(kSupportedCodecs.begin(), kSupportedCodecs.end(), settings.codec) == kSupportedCodecs.end()) {
-    throw InputError(fmt::format("codec '{}': expected one of libx264, mpeg4, mpeg2video", settings.codec));
+    throw InputError(fmt::format("codec '{}': expected one of libx264, mpeg4, mpeg2video, h264_v4l2m2m, h264_vaapi",
+                                 settings.codec));
+  }
+  const bool hardware = isHardwareEncoder(settings.codec);
+  const bool vaapi = settings.codec == "h264_vaapi";
+  if (hardware && pass != EncoderPass::kSingle) {
+    throw InputError(fmt::format("{} encodes in one pass only", settings.codec));
   }
   if (settings.bitrate_bps <= 0)
     throw InputError(fmt::format("bitrate {} bit/s: must be positive", settings.bitrate_bps));
@@ -176,6 +239,9 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   const int coded_width = width;
   const int coded_height = height;
   const bool odd_size = (width % 2) != 0 || (height % 2) != 0;
+  if (hardware && odd_size) {
+    throw InputError(fmt::format("frame size {}x{}: {} needs even sizes", width, height, settings.codec));
+  }
   if (coded_width < 16 || coded_height < 16) {
     throw InputError(fmt::format("frame size {}x{}: the encoder needs at least 16x16 pixels", width, height));
   }
@@ -206,7 +272,10 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   if (!ctx) throw RuntimeFailure("out of memory allocating the encoder");
   ctx->width = coded_width;
   ctx->height = coded_height;
-  ctx->pix_fmt = settings.codec == "libx264" && odd_size ? AV_PIX_FMT_GRAY8 : AV_PIX_FMT_YUV420P;
+  // VAAPI encodes GPU surfaces (uploaded from nv12, the format every VAAPI driver takes).
+  ctx->pix_fmt = vaapi                                     ? AV_PIX_FMT_VAAPI
+                 : settings.codec == "libx264" && odd_size ? AV_PIX_FMT_GRAY8
+                                                           : AV_PIX_FMT_YUV420P;
   // Gray images use the full 0..255 range; signalling it keeps the luma values as they are instead
   // of squeezing them into studio range 16..235 as a swscale conversion would.
   ctx->color_range = AVCOL_RANGE_JPEG;
@@ -215,6 +284,12 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   ctx->bit_rate = settings.bitrate_bps;
   ctx->max_b_frames = 0;  // causal stream: decode order = capture order
   ctx->thread_count = settings.threads;
+  if (settings.constant_bitrate) {
+    // A one-second window: the rate a network link sees, not just the average over the video.
+    ctx->rc_max_rate = settings.bitrate_bps;
+    ctx->rc_min_rate = hardware ? settings.bitrate_bps : 0;
+    ctx->rc_buffer_size = static_cast<int>(std::min<std::int64_t>(settings.bitrate_bps, 1 << 30));
+  }
   if (settings.global_header) ctx->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
   if (pass == EncoderPass::kFirst) ctx->flags |= AV_CODEC_FLAG_PASS1;
   if (pass == EncoderPass::kSecond) ctx->flags |= AV_CODEC_FLAG_PASS2;
@@ -228,6 +303,18 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
     const std::string x264_params = withReproducibleX264Asm(settings.x264_params);
     if (!x264_params.empty()) av_dict_set(&options, "x264-params", x264_params.c_str(), 0);
     if (pass != EncoderPass::kSingle) av_dict_set(&options, "stats", stats_file.c_str(), 0);
+  } else if (hardware) {
+    // Low latency on the device: keyframe interval, no B-frames (set above), one reference.
+    ctx->gop_size = settings.gop_size;
+    ctx->refs = 1;
+    if (vaapi) {
+      av_dict_set(&options, "rc_mode", settings.constant_bitrate ? "CBR" : "VBR", 0);
+      av_dict_set(&options, "async_depth", "1", 0);  // hand each packet back before the next frame
+      s.hw_device = createVaapiDevice(settings.vaapi_device);
+      s.hw_frames = createVaapiFrames(s.hw_device.get(), coded_width, coded_height);
+      ctx->hw_frames_ctx = av_buffer_ref(s.hw_frames.get());
+      if (ctx->hw_frames_ctx == nullptr) throw RuntimeFailure("out of memory referencing the VAAPI frames");
+    }
   } else {
     ctx->gop_size = settings.gop_size;
     if (pass == EncoderPass::kSecond) {
@@ -254,20 +341,17 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   FramePtr frame(av_frame_alloc());
   PacketPtr packet(av_packet_alloc());
   if (!frame || !packet) throw RuntimeFailure("out of memory allocating encoder buffers");
-  frame->format = ctx->pix_fmt;
+  frame->format = vaapi ? AV_PIX_FMT_NV12 : ctx->pix_fmt;
   frame->width = coded_width;
   frame->height = coded_height;
   frame->color_range = AVCOL_RANGE_JPEG;
   if (const int r = av_frame_get_buffer(frame.get(), 0); r < 0) {
     throw RuntimeFailure(fmt::format("cannot allocate a {}x{} frame: {}", coded_width, coded_height, avError(r)));
   }
-  if (frame->format == AV_PIX_FMT_YUV420P) {
-    for (int plane = 1; plane < 3; ++plane) {
-      for (int y = 0; y < (coded_height + 1) / 2; ++y) {
-        std::memset(frame->data[plane] + static_cast<std::ptrdiff_t>(y) * frame->linesize[plane], 128,
-                    static_cast<std::size_t>((coded_width + 1) / 2));
-      }
-    }
+  fillNeutralChroma(*frame);
+  if (vaapi) {
+    s.hw_frame.reset(av_frame_alloc());
+    if (!s.hw_frame) throw RuntimeFailure("out of memory allocating encoder buffers");
   }
 
   s.settings = settings;
@@ -300,7 +384,20 @@ std::span<const EncodedPacket> VideoEncoder::encode(GrayView image, std::int64_t
                 static_cast<std::size_t>(frame.width));
   }
   frame.pts = pts;
-  const int ret = avcodec_send_frame(s.ctx.get(), &frame);
+  AVFrame* input = &frame;
+  if (s.hw_frame) {
+    // VAAPI: a surface from the frames pool (recycled, no allocation once warm), filled by upload.
+    av_frame_unref(s.hw_frame.get());
+    if (const int r = av_hwframe_get_buffer(s.hw_frames.get(), s.hw_frame.get(), 0); r < 0) {
+      throw RuntimeFailure(fmt::format("no free VAAPI surface for frame pts {}: {}", pts, avError(r)));
+    }
+    if (const int r = av_hwframe_transfer_data(s.hw_frame.get(), &frame, 0); r < 0) {
+      throw RuntimeFailure(fmt::format("cannot upload frame pts {} to the GPU: {}", pts, avError(r)));
+    }
+    s.hw_frame->pts = pts;
+    input = s.hw_frame.get();
+  }
+  const int ret = avcodec_send_frame(s.ctx.get(), input);
   if (ret < 0)
     throw RuntimeFailure(fmt::format("{} encoder rejected frame pts {}: {}", s.settings.codec, pts, avError(ret)));
   s.drain();

@@ -1,6 +1,7 @@
 #pragma once
-// Gray frames -> compressed video with libavcodec: a frame-by-frame encoder (live capture) and a
-// file encoder (datasets -> .mp4, two-pass constant bitrate as the VOCA paper encodes).
+// Gray frames -> compressed video with libavcodec: a frame-by-frame encoder (live capture, in
+// software or on the device's hardware encoder) and a file encoder (datasets -> .mp4, two-pass
+// constant bitrate as the VOCA paper encodes).
 
 #include <cstdint>
 #include <filesystem>
@@ -22,7 +23,8 @@ namespace voca::encode {
 inline constexpr const char* kPaperX264Params =
     "partitions=p8x8,p4x4,i8x8:keyint=1000:me=umh:merange=64:subme=6:bframes=0:ref=1";
 
-// How to encode: codec (libx264, mpeg4, mpeg2video), target bitrate, frame rate and rate control.
+// How to encode: codec (libx264, mpeg4, mpeg2video; for live encoding also the hardware H.264
+// encoders h264_v4l2m2m and h264_vaapi), target bitrate, frame rate and rate control.
 struct EncoderSettings {
   std::string codec = "libx264";
   std::int64_t bitrate_bps = 500000;
@@ -37,7 +39,14 @@ struct EncoderSettings {
   // qemu-user emulation, where cross-built tests run.
   int threads = 1;
   bool global_header = false;  // codec headers out of band (extradata) as .mp4 needs; in band for raw streams
+  // Live streaming: hold the rate at bitrate_bps over about a second (VBV / hardware CBR) instead of
+  // averaging it over the whole video.
+  bool constant_bitrate = false;
+  std::string vaapi_device = "/dev/dri/renderD128";  // h264_vaapi only: the render node
 };
+
+// True for the encoders that run on a device (h264_v4l2m2m, h264_vaapi): single pass only.
+bool isHardwareEncoder(std::string_view codec);
 
 // Limits libav's console messages to errors (libx264 prints its statistics at info level).
 void silenceCodecLogs();

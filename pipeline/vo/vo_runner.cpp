@@ -12,6 +12,7 @@
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "drivers/source/dataset_source.h"
+#include "drivers/source/network_source.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
 #include "pipeline/stages/decode_stage.h"
@@ -100,7 +101,53 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
   return true;
 }
 
+namespace {
+
+// `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.
+VoRunResult runOnStream(const VoRunOptions& options) {
+  const std::string url = options.input.string();
+  if (!options.calibration) {
+    throw InputError(fmt::format("{}: a stream carries no calibration; pass the cameras' with --calib", url));
+  }
+  if (options.encode_bitrate_bps > 0) throw InputError(fmt::format("{}: --encode applies to raw datasets only", url));
+  const StereoRig rig = loadCalibration(*options.calibration);
+  if (rig.cameras.size() < 2) {
+    throw InputError(fmt::format("{}: need a stereo calibration", options.calibration->string()));
+  }
+  VocaConfig config = options.config ? loadConfig(*options.config) : VocaConfig{};
+  std::optional<Trajectory> gt;
+  if (options.ground_truth) gt = loadTrajectory(*options.ground_truth);
+  NetworkSourceOptions network;
+  network.start_timeout_s = options.stream_start_timeout_s;
+  network.timeout_s = options.stream_timeout_s;
+  network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
+                                                           : std::function<bool()>(platform::stopRequested);
+  if (options.progress) {
+    fmt::print(stderr, "waiting for the stream on {} (up to {} s)\n", url, options.stream_start_timeout_s);
+  }
+  std::optional<NetworkStereoSource> opened;
+  try {
+    opened.emplace(url, network);
+  } catch (const InputError&) {
+    if (!network.stop_requested()) throw;
+    VoRunResult stopped;  // Ctrl-C while waiting for the stream: a clean stop, nothing estimated
+    stopped.description = fmt::format("{} (stopped while waiting for the stream)", url);
+    stopped.stop_signal = platform::stopSignal();
+    return stopped;
+  }
+  NetworkStereoSource& source = *opened;
+  VoRunResult run = runVisualOdometryOn(source, rig, config, options, gt,
+                                        options.ground_truth ? options.ground_truth->string() : std::string());
+  run.config_name = options.config ? options.config->string() : "euroc (built in)";
+  run.source_end = source.endReason();
+  if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
+  return run;
+}
+
+}  // namespace
+
 VoRunResult runVisualOdometry(const VoRunOptions& options) {
+  if (isStreamUrl(options.input.string())) return runOnStream(options);
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;
@@ -207,6 +254,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     }
     decode_stage = std::make_unique<DecodeStage>(info.streams, decode_options);
     result.decoder_description = decode_stage->description();
+    if (options.progress) fmt::print(stderr, "{}\n", result.decoder_description);  // the choice, logged once
     chain.push_back(decode_stage.get());
     decode_position = static_cast<int>(chain.size());
   }
@@ -334,9 +382,10 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
     }
     fmt::print(out, "\n");
   }
-  if (r.source.frames_lost > 0 || r.source.unpaired > 0) {
-    fmt::print(out, "source: {} frames lost before capture (driver or network), {} unpaired stereo frames\n",
-               r.source.frames_lost, r.source.unpaired);
+  if (r.source.frames_lost > 0 || r.source.unpaired > 0 || !r.source_end.empty()) {
+    fmt::print(out, "source: {} frames lost before capture (driver or network), {} unpaired stereo frames{}\n",
+               r.source.frames_lost, r.source.unpaired,
+               r.source_end.empty() ? "" : fmt::format("; ended: {}", r.source_end));
   }
   if (r.eval) {
     fmt::print(out, "ground truth: {} ({} poses associated)\n", r.ground_truth, r.eval->ate.stats.count);
@@ -429,6 +478,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
   j["image_size"] = {r.width, r.height};
   j["frames"] = r.frames;
   j["stopped_by_signal"] = r.stop_signal;
+  j["source_ended"] = r.source_end;  // live input: why it ended; the counters are under "pipeline"
   const RunReport& p = r.pipeline;
   if (p.error) {
     j["error"] = {{"stage", p.error->stage}, {"frame", p.error->frame_index}, {"message", p.error->message}};

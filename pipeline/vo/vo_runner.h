@@ -27,7 +27,7 @@
 namespace voca::pipeline {
 
 struct VoRunOptions {
-  // Input.
+  // Input: a dataset folder, or a stream URL (udp://127.0.0.1:5000) that `voca stream` sends to.
   std::filesystem::path input;
   std::optional<std::filesystem::path> calibration;
   std::optional<std::filesystem::path> config;        // file or shipped name; default: euroc (kitti for KITTI folders)
@@ -39,6 +39,9 @@ struct VoRunOptions {
   int max_points = 1000;                // frontend capacity per camera
   bool estimate = true;                 // false: frontend only (`voca track`)
   decode::DecoderBackend decoder = decode::DecoderBackend::kAuto;
+  // Stream URLs: how long to wait for the stream to begin, and the silence that ends it.
+  double stream_start_timeout_s = 30.0;
+  double stream_timeout_s = 3.0;
 
   // Outputs (empty paths: not written).
   std::filesystem::path trajectory_file;
@@ -69,6 +72,7 @@ struct VoRunResult {
   BackendTotals backend;
   std::vector<FrameRecord> rows;
   RunReport pipeline;              // per-stage latency, queues, drops, damaged frames, error
+  std::string source_end;          // live input: why it ended ("no data for 3 s"), empty otherwise
   std::optional<EvalReport> eval;  // when there is ground truth
   std::string ground_truth;
   SourceCounters source;  // frames the live source lost or could not pair

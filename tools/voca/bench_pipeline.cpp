@@ -32,6 +32,7 @@ struct PipelineBenchOptions {
   int repeat = 3;
   int frames = 0;
   bool skip_realtime = false;
+  std::string decoder = "auto";
 };
 
 // Peak resident memory of this process since the last reset, in MiB (VmHWM).
@@ -79,6 +80,7 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
     if (!opts.config.empty()) options.config = opts.config;
     if (!opts.mode.empty()) options.mode = requirePriorMode(opts.mode, "--mode");
     options.max_frames = opts.frames;
+    options.decoder = decode::parseBackend(opts.decoder);
     options.progress = false;
     options.keep_trajectory = false;
     options.pipeline.threads = threads;
@@ -149,6 +151,7 @@ Runner configurePipelineBench(CLI::App& app) {
   app.add_option("--repeat", opts->repeat, "Offline runs per thread layout")->capture_default_str();
   app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
   app.add_flag("--no-realtime", opts->skip_realtime, "Skip the real-rate latency run");
+  app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi or v4l2m2m")->capture_default_str();
   app.footer(
       "Offline: the whole VO (read, decode, frontend, backend, write; trajectory kept in memory only) with\n"
       "every stage in one thread, then with one thread per stage, alternating, --repeat times each; prints\n"

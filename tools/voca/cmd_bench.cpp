@@ -84,6 +84,7 @@ struct RateSamples {
 struct DecodeBenchOptions {
   std::string video;
   int repeat = 5;
+  std::string decoder = "software";
 };
 
 struct DecodeVariant {
@@ -154,9 +155,15 @@ int runDecodeBench(const DecodeBenchOptions& opts) {
   variants[1].options.export_motion = false;
   variants[2].label = "MV-only parse (loop filter skipped)";
   variants[2].options.decode_pixels = false;
+  const DecoderBackend backend = parseBackend(opts.decoder);
   for (DecodeVariant& v : variants) {
-    v.options.backend = DecoderBackend::kSoftware;
+    v.options.backend = backend;
     v.options.log_choice = false;
+  }
+  {
+    // The backend actually used (auto may fall back), logged once.
+    const VideoDecoder probe(stream, variants[0].options, nullptr, "bench");
+    fmt::print("{}\n", probe.description());
   }
 
   DecodedFrame frame;
@@ -215,8 +222,12 @@ Runner configureDecodeBench(CLI::App& app) {
   auto opts = std::make_shared<DecodeBenchOptions>();
   app.add_option("video", opts->video, "Video file (.mp4 with H.264, MPEG-4 Part 2 or MPEG-2)")->required();
   app.add_option("--repeat", opts->repeat, "Timed runs per variant; medians are reported")->capture_default_str();
+  app.add_option("--decoder", opts->decoder,
+                 "Decoder for the full-decode variants: auto, software, vaapi or v4l2m2m (hardware decodes the\n"
+                 "pixels, a software parse gives the vectors)")
+      ->capture_default_str();
   app.footer(
-      "Decodes the whole video in memory (demuxing excluded) on one thread with the software decoder, as\n"
+      "Decodes the whole video in memory (demuxing excluded) on one thread with the chosen decoder, as\n"
       "(1) full decode with motion-vector export, (2) full decode without, (3) MV-only parse with the\n"
       "loop filter skipped, and prints frames per second and the cost of MV extraction.");
   return [opts] { return runDecodeBench(*opts); };

@@ -20,6 +20,7 @@ struct RunOptions {
   std::string input, calib, config, mode, bridge, encode, out, gt, format = "tum";
   int frames = 0;
   int max_points = 1000;
+  double stream_timeout = 3.0, stream_wait = 30.0;
   voca::cli::PipelineCli pipeline;
 };
 
@@ -35,6 +36,11 @@ int runRun(const RunOptions& o) {
   if (o.frames < 0) throw voca::InputError("--frames: expected 0 (all) or a positive count");
   options.max_frames = o.frames;
   options.max_points = o.max_points;
+  if (!(o.stream_timeout > 0.0) || !(o.stream_wait > 0.0)) {
+    throw voca::InputError("--stream-timeout and --stream-wait: expected positive seconds");
+  }
+  options.stream_timeout_s = o.stream_timeout;
+  options.stream_start_timeout_s = o.stream_wait;
   const auto format = voca::parseTrajectoryFormat(o.format);
   if (!format) throw voca::InputError(fmt::format("--format: expected tum, euroc or kitti, got \"{}\"", o.format));
   options.trajectory_file = o.out;
@@ -53,8 +59,12 @@ const bool registered = voca::cli::registerCommand({
     .order = 50,
     .configure = [](CLI::App& app) -> Runner {
       auto o = std::make_shared<RunOptions>();
-      app.add_option("input", o->input, "Raw dataset (EuRoC/TUM-VI/KITTI folder) or VOCA video folder")->required();
-      app.add_option("--calib", o->calib, "Calibration file (default: the one found with the dataset)");
+      app.add_option("input", o->input,
+                     "Raw dataset (EuRoC/TUM-VI/KITTI folder), VOCA video folder, or a stream URL that `voca stream` "
+                     "sends to (udp://127.0.0.1:5000)")
+          ->required();
+      app.add_option("--calib", o->calib,
+                     "Calibration file (default: the one found with the dataset; required for a stream URL)");
       app.add_option("--config", o->config,
                      "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for "
                      "KITTI folders)");
@@ -72,13 +82,21 @@ const bool registered = voca::cli::registerCommand({
                      "Ground truth for ATE/RTE (TUM/EuRoC/KITTI; default: the dataset's own, when it has one)");
       app.add_option("--frames", o->frames, "Process only the first N frames (0 = all)")->capture_default_str();
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
+      app.add_option("--stream-wait", o->stream_wait, "Stream URL: seconds to wait for the stream to begin")
+          ->capture_default_str();
+      app.add_option("--stream-timeout", o->stream_timeout,
+                     "Stream URL: seconds without data that end the run (the sender has stopped)")
+          ->capture_default_str();
       voca::cli::addPipelineOptions(app, o->pipeline);
       app.footer(
           "Each frame is tracked, then estimated, and its pose written as it was estimated then (causal; later\n"
           "window refinements never rewrite it). Poses are in the calibration's body frame (T_world_body =\n"
           "T_world_cam0 T_body_cam0^-1), so they compare directly with the dataset's ground truth; the world\n"
           "frame is the body pose of the first frame. Resets (tracking failure, re-initialised at the last\n"
-          "good pose) are reported on stderr and counted.\n\n" +
+          "good pose) are reported on stderr and counted.\n"
+          "A stream URL is decoded and estimated as frames arrive (live policy: a stage that falls behind\n"
+          "drops the oldest waiting frame); frames lost on the network are skipped and counted, the VO goes\n"
+          "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly.\n\n" +
           voca::cli::pipelineHelpFooter());
       return [o] { return runRun(*o); };
     },

@@ -1,0 +1,418 @@
+// Compress-then-analyze on loopback (127.0.0.1 only): a rendered stereo sequence replayed at its
+// real rate, encoded live with libx264, sent as MPEG-TS over UDP and received by the network source
+// while the VO runs on it. Without loss every access unit arrives bit-identical with its sensor
+// stamp, so the live trajectory equals the offline one on the same encoded frames; with a relay that
+// drops datagrams, `voca run udp://...` still finishes and counts what was lost.
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "drivers/dataset/dataset.h"
+#include "drivers/encode/live_encoder.h"
+#include "drivers/network/frame_stamp.h"
+#include "drivers/source/dataset_source.h"
+#include "drivers/source/network_source.h"
+#include "pipeline/stream/stream_runner.h"
+#include "pipeline/vo/vo_runner.h"
+#include "tests/test_support.h"
+#include "voca/calib/calibration.h"
+
+using namespace voca;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kGop = 20;  // a keyframe every second at 20 Hz, so a loss heals within the test
+
+// A 3 s rendered sequence (60 stereo frames at 20 Hz), made once per test run.
+struct Rendered {
+  test::ScratchDir dir{"stream-e2e"};
+  fs::path raw = dir / "synth";
+  Rendered() {
+    REQUIRE(test::runVoca("synth --out " + raw.string() + " --motion gentle --seconds 3 --supersample 1") == 0);
+  }
+};
+const Rendered& rendered() {
+  static const Rendered sequence;
+  return sequence;
+}
+
+// A UDP port on 127.0.0.1 that nobody is bound to right now.
+int freeUdpPort() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0);
+  socklen_t len = sizeof(addr);
+  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0);
+  ::close(fd);
+  return ntohs(addr.sin_port);
+}
+
+// Waits (bounded) until some socket is bound to the UDP port: the receiver must listen before the
+// sender's first keyframe goes out.
+bool waitUntilBound(int port, double seconds) {
+  char hex[8];
+  std::snprintf(hex, sizeof(hex), ":%04X", port);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream table("/proc/net/udp");
+    std::string line;
+    while (std::getline(table, line)) {
+      // "  sl  local_address rem_address ...": the local address is the second column.
+      std::istringstream fields(line);
+      std::string slot, local;
+      fields >> slot >> local;
+      if (local.size() > 5 && local.substr(local.size() - 5) == hex) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+// Joins a thread however the test leaves the scope (a failed REQUIRE throws past the join).
+class Joined {
+ public:
+  explicit Joined(std::thread& thread) : thread_(thread) {}
+  ~Joined() {
+    if (thread_.joinable()) thread_.join();
+  }
+  Joined(const Joined&) = delete;
+  Joined& operator=(const Joined&) = delete;
+
+ private:
+  std::thread& thread_;
+};
+
+encode::LiveEncoderSettings x264Settings() {
+  encode::LiveEncoderSettings live;
+  live.kind = encode::EncoderKind::kX264;
+  live.bitrate_bps = 800000;
+  live.gop = kGop;
+  return live;
+}
+
+// Pairs as a source delivered them, for comparison.
+struct Received {
+  std::int64_t t_ns = 0, frame_index = 0;
+  std::array<std::vector<std::uint8_t>, 2> bytes;
+};
+
+// Forwards a source and keeps a copy of every pair it delivers.
+class TapSource : public StereoSource {
+ public:
+  explicit TapSource(StereoSource& inner) : inner_(inner) {}
+  const SourceInfo& info() const override { return inner_.info(); }
+  bool next(EncodedStereoPacket& packet) override {
+    if (!inner_.next(packet)) return false;
+    pairs.push_back({packet.t_ns, packet.frame_index, {packet.packets[0].bytes, packet.packets[1].bytes}});
+    return true;
+  }
+  void interrupt() override { inner_.interrupt(); }
+  SourceCounters counters() const override { return inner_.counters(); }
+  std::vector<Received> pairs;
+
+ private:
+  StereoSource& inner_;
+};
+
+// Pairs from memory, as a recording of the same encoded frames would replay them.
+class MemorySource : public StereoSource {
+ public:
+  MemorySource(SourceInfo info, const std::vector<Received>& pairs) : info_(std::move(info)), pairs_(pairs) {
+    info_.live = false;
+    info_.expected_frames = static_cast<std::int64_t>(pairs.size());
+  }
+  const SourceInfo& info() const override { return info_; }
+  bool next(EncodedStereoPacket& packet) override {
+    if (next_ == pairs_.size()) return false;
+    const Received& r = pairs_[next_];
+    packet.t_ns = r.t_ns;
+    packet.frame_index = r.frame_index;
+    for (std::size_t c = 0; c < 2; ++c) {
+      packet.packets[c].bytes = r.bytes[c];
+      packet.packets[c].pts = r.frame_index;
+      packet.packets[c].dts = r.frame_index;
+      packet.packets[c].keyframe = r.frame_index % kGop == 0;
+      packet.packets[c].index = static_cast<std::int64_t>(next_);
+    }
+    ++next_;
+    return true;
+  }
+
+ private:
+  SourceInfo info_;
+  const std::vector<Received>& pairs_;
+  std::size_t next_ = 0;
+};
+
+// The same frames encoded here, off the network, with the same encoder settings and stamps.
+std::vector<Received> encodeLocally(const fs::path& raw) {
+  const Dataset dataset = openDataset(raw);
+  std::unique_ptr<StereoSource> source = openDatasetSource(dataset);
+  encode::LiveEncoderSettings live = x264Settings();
+  live.fps_num = static_cast<int>(std::lround(source->info().nominal_rate_hz * 1000.0));
+  live.fps_den = 1000;
+  std::array<encode::VideoEncoder, 2> encoders;
+  for (auto& e : encoders) {
+    e.open(encode::lowLatencySettings(encode::EncoderKind::kX264, live), source->info().width, source->info().height);
+  }
+  std::vector<Received> out;
+  RawStereoFrame frame;
+  while (source->next(frame)) {
+    Received r{frame.t_ns, frame.frame_index, {}};
+    for (std::size_t c = 0; c < 2; ++c) {
+      const auto packets = encoders[c].encode(frame.images[c].view(), frame.frame_index);
+      REQUIRE(packets.size() == 1);
+      network::stampAccessUnit(packets[0].bytes, {frame.t_ns, frame.frame_index}, r.bytes[c]);
+    }
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// The MPEG-TS muxer starts each H.264 access unit with an access unit delimiter (00 00 00 01 09 xx)
+// when the encoder did not; everything after it is the sender's bytes.
+std::vector<std::uint8_t> withoutDelimiter(const std::vector<std::uint8_t>& bytes) {
+  if (bytes.size() > 6 && bytes[0] == 0 && bytes[1] == 0 && bytes[2] == 0 && bytes[3] == 1 && (bytes[4] & 0x1f) == 9) {
+    return {bytes.begin() + 6, bytes.end()};
+  }
+  return bytes;
+}
+
+pipeline::VoRunOptions quietOptions() {
+  pipeline::VoRunOptions options;
+  options.progress = false;
+  options.pipeline.stop_requested = [] { return false; };
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("a stream over loopback arrives bit-identical and the live VO matches the offline run") {
+  const fs::path raw = rendered().raw;
+  const Dataset dataset = openDataset(raw);
+  REQUIRE(dataset.calibration);
+  const StereoRig rig = loadCalibration(*dataset.calibration);
+  const int port = freeUdpPort();
+  const std::string url = "udp://127.0.0.1:" + std::to_string(port);
+
+  // Receiver: waits for the stream, then runs the VO on it as it arrives.
+  std::optional<pipeline::VoRunResult> live;
+  std::vector<Received> received;
+  SourceCounters counters;
+  std::string end_reason, receive_error;
+  SourceInfo received_info;
+  std::thread receiver([&] {
+    try {
+      NetworkSourceOptions network;
+      network.start_timeout_s = 20.0;
+      network.timeout_s = 1.0;
+      NetworkStereoSource source(url, network);
+      received_info = source.info();
+      TapSource tap(source);
+      live = pipeline::runVisualOdometryOn(tap, rig, VocaConfig{}, quietOptions());
+      received = std::move(tap.pairs);
+      counters = source.counters();
+      end_reason = source.endReason();
+    } catch (const std::exception& e) {
+      receive_error = e.what();
+    }
+  });
+  const Joined join_receiver(receiver);
+  REQUIRE(waitUntilBound(port, 10.0));
+
+  pipeline::StreamOptions send;
+  send.input = raw;
+  send.url = url;
+  send.encoder = x264Settings();
+  send.progress = false;
+  send.stop_requested = [] { return false; };
+  const auto start = std::chrono::steady_clock::now();
+  const pipeline::StreamResult sent = pipeline::runStream(send);
+  const double send_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  receiver.join();
+  REQUIRE(receive_error == "");
+  REQUIRE(live);
+
+  const std::vector<Received> local = encodeLocally(raw);
+  const auto n = static_cast<std::int64_t>(dataset.frames.size());
+  CHECK(sent.frames == n);
+  CHECK(sent.encoder_description.find("encoder: x264") == 0);
+  // Real rate: 60 frames at 20 Hz take 2.95 s to send (first to last); faster means no pacing.
+  CHECK(send_s > 0.9 * static_cast<double>(n - 1) / 20.0);
+  MESSAGE("sent " << sent.frames << " frames in " << sent.seconds << " s; encode p50 " << sent.encode_ms_p50
+                  << " ms, p99 " << sent.encode_ms_p99 << " ms (shared machine: indicative only)");
+
+  // Nothing lost at the nominal rate: every pair, in order, bit-identical, with its exact stamp.
+  CHECK(counters.frames_lost == 0);
+  CHECK(counters.unpaired == 0);
+  CHECK(end_reason == "no data for 1 s");
+  REQUIRE(received.size() == local.size());
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    INFO("frame " << i);
+    CHECK(received[i].frame_index == static_cast<std::int64_t>(i));
+    CHECK(received[i].t_ns == dataset.frames[i].t_ns);
+    CHECK(withoutDelimiter(received[i].bytes[0]) == local[i].bytes[0]);
+    CHECK(withoutDelimiter(received[i].bytes[1]) == local[i].bytes[1]);
+  }
+
+  // The offline VO on the same encoded frames.
+  MemorySource offline_source(received_info, local);
+  const pipeline::VoRunResult offline =
+      pipeline::runVisualOdometryOn(offline_source, rig, VocaConfig{}, quietOptions());
+  REQUIRE_FALSE(offline.pipeline.error);
+  REQUIRE_FALSE(live->pipeline.error);
+  CHECK(live->pipeline.damaged == 0);
+  std::map<std::int64_t, Eigen::Vector3d> offline_positions;
+  for (const auto& pose : offline.trajectory.poses) offline_positions[pose.t_ns] = pose.T_world_body.translation();
+  REQUIRE(offline.trajectory.poses.size() == static_cast<std::size_t>(n));
+  // The live run drops frames only when this (shared) machine cannot keep up at 20 Hz. Without a
+  // drop the two runs see the same frames and must agree exactly (the VO is deterministic); with
+  // one, later poses come from a slightly different frame history, so they agree within 5 cm on a
+  // sequence moving a few decimetres.
+  const bool exact = live->pipeline.dropped == 0;
+  MESSAGE("live run dropped " << live->pipeline.dropped << " frames (live policy)");
+  CHECK(live->trajectory.poses.size() + static_cast<std::size_t>(live->pipeline.dropped) ==
+        static_cast<std::size_t>(n));
+  for (const auto& pose : live->trajectory.poses) {
+    REQUIRE(offline_positions.count(pose.t_ns) == 1);
+    const double error = (pose.T_world_body.translation() - offline_positions[pose.t_ns]).norm();
+    if (exact) {
+      CHECK(error == 0.0);
+    } else {
+      CHECK(error < 0.05);
+    }
+  }
+}
+
+namespace {
+
+// Forwards datagrams from 127.0.0.1:in_port to 127.0.0.1:out_port, dropping the ones whose number
+// (from 0) is listed, as a burst of loss on a radio link would. Stops when told or after 30 s.
+class LossyRelay {
+ public:
+  LossyRelay(int in_port, int out_port, std::vector<int> drop) : drop_(std::move(drop)) {
+    fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    REQUIRE(fd_ >= 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    addr.sin_port = htons(static_cast<std::uint16_t>(in_port));
+    REQUIRE(::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0);
+    out_ = addr;
+    out_.sin_port = htons(static_cast<std::uint16_t>(out_port));
+    thread_ = std::thread([this] { run(); });
+  }
+  ~LossyRelay() {
+    stop_ = true;
+    thread_.join();
+    ::close(fd_);
+  }
+  LossyRelay(const LossyRelay&) = delete;
+  LossyRelay& operator=(const LossyRelay&) = delete;
+  int forwarded() const { return forwarded_; }
+  int dropped() const { return dropped_; }
+
+ private:
+  void run() {
+    std::vector<char> buffer(65536);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    int count = 0;
+    while (!stop_ && std::chrono::steady_clock::now() < deadline) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      const ssize_t n = ::recv(fd_, buffer.data(), buffer.size(), 0);
+      if (n <= 0) continue;
+      if (std::find(drop_.begin(), drop_.end(), count++) != drop_.end()) {
+        ++dropped_;
+        continue;
+      }
+      ::sendto(fd_, buffer.data(), static_cast<std::size_t>(n), 0, reinterpret_cast<const sockaddr*>(&out_),
+               sizeof(out_));
+      ++forwarded_;
+    }
+  }
+  std::vector<int> drop_;
+  int fd_ = -1;
+  sockaddr_in out_{};
+  std::atomic<bool> stop_{false};
+  std::atomic<int> forwarded_{0}, dropped_{0};
+  std::thread thread_;
+};
+
+}  // namespace
+
+TEST_CASE("voca run on a stream with lost datagrams finishes, counts the loss and keeps estimating") {
+  const fs::path raw = rendered().raw;
+  const Dataset dataset = openDataset(raw);
+  REQUIRE(dataset.calibration);
+  test::ScratchDir out("stream-loss");
+  const int relay_port = freeUdpPort();
+  const int receive_port = freeUdpPort();
+  REQUIRE(relay_port != receive_port);
+  // Two bursts, around frames 10 and 25 of 60 (about 9 datagrams per stereo frame at 800 kbit/s),
+  // each healed by the next keyframe (frames 20 and 40).
+  LossyRelay relay(relay_port, receive_port, {90, 91, 92, 230, 231});
+
+  int run_status = -1;
+  std::thread receiver([&] {
+    run_status = test::runVoca("run udp://127.0.0.1:" + std::to_string(receive_port) + " --calib " +
+                               dataset.calibration->string() + " --out " + (out / "traj.txt").string() + " --stats " +
+                               (out / "stats.json").string() + " --stream-wait 20 --stream-timeout 1");
+  });
+  REQUIRE(waitUntilBound(receive_port, 10.0));
+  const int stream_status = test::runVoca("stream " + raw.string() + " udp://127.0.0.1:" + std::to_string(relay_port) +
+                                          " --encoder x264 --bitrate 800k --gop " + std::to_string(kGop));
+  receiver.join();
+  CHECK(stream_status == 0);
+  CHECK(run_status == 0);
+  CHECK(relay.dropped() > 0);
+
+  std::ifstream stats_file(out / "stats.json");
+  REQUIRE(stats_file);
+  const nlohmann::json stats = nlohmann::json::parse(stats_file);
+  const auto n = static_cast<std::int64_t>(dataset.frames.size());
+  const std::int64_t lost = stats["pipeline"]["source_frames_lost"];
+  const std::int64_t damaged = stats["pipeline"]["damaged"];
+  const std::int64_t frames = stats["frames"];
+  MESSAGE("relay dropped " << relay.dropped() << " of " << relay.dropped() + relay.forwarded() << " datagrams; " << lost
+                           << " frames lost, " << damaged << " damaged, " << frames << " estimated");
+  // Each burst breaks an access unit; the source skips to the next keyframe of both cameras, so a
+  // burst costs at most a GOP of frames, all counted as lost.
+  CHECK(relay.dropped() == 5);
+  CHECK(lost > 0);
+  CHECK(lost <= 2 * kGop);
+  CHECK(stats["source_ended"] == "no data for 1 s");
+  // The VO went on after the second burst, up to the end of the stream. (How many frames it
+  // estimates depends on this machine's speed: a live run drops frames it cannot keep up with.)
+  CHECK(frames >= n / 4);
+  std::ifstream trajectory(out / "traj.txt");
+  int rows = 0;
+  double last_t = 0.0;
+  for (std::string line; std::getline(trajectory, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    ++rows;
+    last_t = std::stod(line.substr(0, line.find(' ')));
+  }
+  CHECK(rows == frames);
+  CHECK(last_t >= static_cast<double>(dataset.frames[static_cast<std::size_t>(n - 10)].t_ns) * 1e-9 - 1e-6);
+}
