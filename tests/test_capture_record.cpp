@@ -45,7 +45,8 @@ CameraRecordOptions recordOptions(const fs::path& out, const fs::path& calibrati
   options.cameras.devices = {"/dev/video0", "/dev/video2"};
   options.out = out;
   options.calibration = calibration;
-  options.encode.bitrate_bps = 400'000;
+  options.encoder.bitrate_bps = 400'000;
+  options.encoder.kind = encode::EncoderKind::kX264;
   return options;
 }
 
@@ -160,21 +161,24 @@ TEST_CASE("recording refuses an existing recording and a calibration of another 
   CHECK(io.openHandles() == 0);
 }
 
-TEST_CASE("live encoder settings are causal and low latency") {
-  const encode::EncoderSettings s =
-      encode::liveEncoderSettings({.encoder = "x264", .bitrate_bps = 1'000'000, .fps = 30.0});
+TEST_CASE("recording encoder settings: the cameras' rate, headers out of band for the .mp4, causal x264") {
+  encode::LiveEncoderSettings live;
+  live.kind = encode::EncoderKind::kX264;
+  encode::setFrameRate(live, 30.0);
+  CHECK(live.fps_num == 30);
+  CHECK(live.fps_den == 1);
+  encode::setFrameRate(live, 29.97);
+  CHECK(live.fps_num == 29970);
+  CHECK(live.fps_den == 1000);
+  CHECK_THROWS_AS(encode::setFrameRate(live, 0.0), InputError);
+  CHECK_THROWS_AS(encode::setFrameRate(live, 5000.0), InputError);
+  live.global_header = true;
+  const encode::EncoderSettings s = encode::lowLatencySettings(encode::EncoderKind::kX264, live);
   CHECK(s.codec == "libx264");
+  CHECK(s.global_header);
   CHECK_FALSE(s.two_pass);
-  CHECK(s.x264_tune == "zerolatency");
   CHECK(s.x264_params.find("bframes=0") != std::string::npos);
   CHECK(s.x264_params.find("ref=1") != std::string::npos);
   CHECK(s.x264_params.find("rc-lookahead=0") != std::string::npos);
-  CHECK(s.x264_params.find("keyint=300") != std::string::npos);
-  CHECK(s.fps_num == 30);
-  CHECK(s.fps_den == 1);
-  const encode::EncoderSettings ntsc =
-      encode::liveEncoderSettings({.encoder = "x264", .bitrate_bps = 1'000'000, .fps = 29.97});
-  CHECK(ntsc.fps_num == 29970);
-  CHECK(ntsc.fps_den == 1000);
-  CHECK_THROWS_AS(encode::liveEncoderSettings({.encoder = "vp9", .bitrate_bps = 1'000'000, .fps = 30.0}), InputError);
+  CHECK_THROWS_AS(encode::parseEncoderKind("vp9"), InputError);
 }

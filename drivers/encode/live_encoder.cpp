@@ -1,5 +1,6 @@
 #include "drivers/encode/live_encoder.h"
 
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
@@ -47,8 +48,9 @@ const char* encoderCodecName(EncoderKind kind) {
 }
 
 std::string lowLatencyX264Params(int gop) {
-  return fmt::format("bframes=0:ref=1:keyint={}:min-keyint={}:scenecut=0:rc-lookahead=0:sync-lookahead=0:mbtree=0:force-cfr=1", gop,
-                     gop);
+  return fmt::format(
+      "bframes=0:ref=1:keyint={}:min-keyint={}:scenecut=0:rc-lookahead=0:sync-lookahead=0:mbtree=0:force-cfr=1", gop,
+      gop);
 }
 
 EncoderSettings lowLatencySettings(EncoderKind kind, const LiveEncoderSettings& live) {
@@ -67,9 +69,23 @@ EncoderSettings lowLatencySettings(EncoderKind kind, const LiveEncoderSettings& 
   settings.x264_preset = "veryfast";
   settings.x264_tune.clear();
   settings.x264_params = lowLatencyX264Params(live.gop);
-  settings.threads = 1;            // no frame threads: they would hold frames back
-  settings.global_header = false;  // SPS/PPS in band, repeated at each keyframe, as a stream needs
+  settings.threads = 1;  // no frame threads: they would hold frames back
+  settings.global_header = live.global_header;
   return settings;
+}
+
+void setFrameRate(LiveEncoderSettings& live, double fps_hz) {
+  if (!(fps_hz > 0.0) || fps_hz > 1000.0) {
+    throw InputError(fmt::format("frame rate {} fps: expected 0 < fps <= 1000", fps_hz));
+  }
+  const long millihertz = std::lround(fps_hz * 1000.0);
+  if (millihertz % 1000 == 0) {
+    live.fps_num = static_cast<int>(millihertz / 1000);
+    live.fps_den = 1;
+  } else {
+    live.fps_num = static_cast<int>(millihertz);
+    live.fps_den = 1000;
+  }
 }
 
 EncoderProbe systemEncoderProbe() {

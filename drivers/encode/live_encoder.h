@@ -31,7 +31,14 @@ struct LiveEncoderSettings {
   // that a receiver that lost a packet or joined late recovers within a few seconds.
   int gop = 120;
   std::string vaapi_device = "/dev/dri/renderD128";
+  // SPS/PPS out of band, as an .mp4 needs (`voca record`); false: in band, repeated at each keyframe,
+  // as a stream needs (`voca stream`).
+  bool global_header = false;
 };
+
+// Sets fps_num/fps_den from a rate in Hz (exact to 1/1000 Hz: 29.97 -> 29970/1000). Throws InputError
+// unless 0 < fps_hz <= 1000.
+void setFrameRate(LiveEncoderSettings& live, double fps_hz);
 
 // The x264 options of a causal, zero-delay stream: no B-frames, one reference, no look-ahead
 // (rc-lookahead and sync-lookahead 0, and force-cfr: x264's variable-frame-rate input mode holds one

@@ -525,40 +525,6 @@ class RemoveOnFailure {
 
 }  // namespace
 
-EncoderSettings liveEncoderSettings(const LiveEncodeOptions& options) {
-  if (options.encoder != "x264") {
-    throw InputError(fmt::format("encoder \"{}\": expected x264", options.encoder));
-  }
-  if (!(options.fps > 0.0) || options.fps > 1000.0) {
-    throw InputError(fmt::format("frame rate {} fps: expected 0 < fps <= 1000", options.fps));
-  }
-  EncoderSettings settings;
-  settings.codec = "libx264";
-  settings.bitrate_bps = options.bitrate_bps;
-  const long millihertz = std::lround(options.fps * 1000.0);
-  if (millihertz % 1000 == 0) {
-    settings.fps_num = static_cast<int>(millihertz / 1000);
-    settings.fps_den = 1;
-  } else {
-    settings.fps_num = static_cast<int>(millihertz);
-    settings.fps_den = 1000;
-  }
-  settings.two_pass = false;
-  // veryfast keeps two 640x480 streams at 30 fps within a Raspberry Pi 5's cores; zerolatency turns
-  // off look-ahead, frame threads and B-frames, so each frame's packet comes out with the frame.
-  settings.x264_preset = "veryfast";
-  settings.x264_tune = "zerolatency";
-  // Causal and decodable frame by frame as the paper's stream: no B-frames, one reference; a keyframe
-  // every 10 s bounds how long a lost packet hurts; a VBV cap of one second holds the bitrate.
-  const long kbps = static_cast<long>(options.bitrate_bps / 1000);
-  settings.x264_params =
-      fmt::format("bframes=0:ref=1:keyint={}:rc-lookahead=0:sync-lookahead=0:vbv-maxrate={}:vbv-bufsize={}",
-                  std::max(1L, std::lround(options.fps * 10.0)), kbps, kbps);
-  settings.threads = 1;
-  settings.global_header = true;  // .mp4 keeps SPS/PPS in the sample description
-  return settings;
-}
-
 struct Mp4Writer::Impl {
   explicit Impl(const std::filesystem::path& path) : muxer(path) {}
   Mp4Muxer muxer;

@@ -129,16 +129,6 @@ class Mp4Writer {
   std::unique_ptr<Impl> impl_;
 };
 
-// The encoder settings for live capture (`voca record`): one pass, no B-frames, one reference frame,
-// no look-ahead (x264's zerolatency tune), a long GOP and a bitrate cap, so every packet leaves the
-// encoder with the frame that made it. The one place that chooses how live video is encoded.
-struct LiveEncodeOptions {
-  std::string encoder = "x264";  // libx264 (software, everywhere)
-  std::int64_t bitrate_bps = 2'000'000;
-  double fps = 30.0;  // the container's nominal rate; frame times come from the capture timestamps
-};
-EncoderSettings liveEncoderSettings(const LiveEncodeOptions& options);
-
 // Called for each frame given to encodeVideoFile: pass (1-based), number of passes, frame index.
 using EncodeProgress = std::function<void(int pass, int num_passes, int frame_index)>;
 // Supplies the whole sequence, in order, by calling emit once per frame. It is called once per

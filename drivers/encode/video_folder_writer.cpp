@@ -11,7 +11,7 @@ namespace voca::encode {
 
 namespace fs = std::filesystem;
 
-VideoFolderWriter::VideoFolderWriter(const fs::path& out, int width, int height, const EncoderSettings& settings,
+VideoFolderWriter::VideoFolderWriter(const fs::path& out, int width, int height, const LiveEncoderSettings& encoder,
                                      const std::optional<fs::path>& calibration)
     : out_(out) {
   if (fs::exists(out / "mav0")) {
@@ -29,14 +29,16 @@ VideoFolderWriter::VideoFolderWriter(const fs::path& out, int width, int height,
       }
     }
   }
-  EncoderSettings file_settings = settings;
+  LiveEncoderSettings file_settings = encoder;
   file_settings.global_header = true;  // mp4 keeps SPS/PPS in the sample description
   std::error_code error;
   for (std::size_t c = 0; c < 2; ++c) {
     const fs::path folder = out / "mav0" / fmt::format("cam{}", c);
     fs::create_directories(folder, error);
     if (error) throw InputError(fmt::format("cannot create {}: {}", folder.string(), error.message()));
-    encoders_[c].open(file_settings, width, height);
+    const EncoderChoice choice = openLiveEncoder(encoders_[c], file_settings, width, height);
+    file_settings.kind = choice.kind;  // both cameras on the same encoder
+    encoder_description_ = choice.description;
     writers_[c] = std::make_unique<Mp4Writer>(folder / "data.mp4");
     writers_[c]->begin(encoders_[c]);
     csv_[c].open(folder / "data.csv");
@@ -44,7 +46,7 @@ VideoFolderWriter::VideoFolderWriter(const fs::path& out, int width, int height,
     if (!csv_[c]) throw InputError(fmt::format("cannot write {}", (folder / "data.csv").string()));
   }
   if (rig) {
-    // Odd sizes are coded as their even crop (VideoEncoder): the intrinsics stay valid, the size shrinks.
+    // The coded size (an encoder that cannot code odd sizes codes the even crop): the intrinsics stay valid.
     for (CameraCalibration& camera : rig->cameras) {
       camera.width = encoders_[0].width();
       camera.height = encoders_[0].height();
@@ -93,8 +95,9 @@ RecordReport recordStereo(StereoSource& source, const fs::path& out, const Recor
   if (info.kind != SourceKind::kRaw) {
     throw InputError(fmt::format("{}: delivers compressed video; recording takes raw frames", info.description));
   }
-  VideoFolderWriter writer(out, info.width, info.height, options.settings, options.calibration);
+  VideoFolderWriter writer(out, info.width, info.height, options.encoder, options.calibration);
   RecordReport report;
+  report.encoder = writer.encoderDescription();
   RawStereoFrame frame;
   for (GrayImage& image : frame.images) image.reserve(info.width, info.height);
   std::exception_ptr failure;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/encode/live_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "drivers/source/stereo_source.h"
 
@@ -21,10 +22,11 @@ namespace voca::encode {
 class VideoFolderWriter {
  public:
   // Creates out (which must not hold a recording already) and opens both encoders for frames of
-  // width x height. calibration, when given, is loaded (any format loadCalibration reads), checked
+  // width x height, as the live encoder chooses (encoder.kind auto: the first that opens; the second
+  // camera gets the first's kind). calibration, when given, is loaded (any format loadCalibration reads), checked
   // against the frame size and written as out/calib.json. Throws InputError for an unwritable or
   // non-empty folder, a calibration that does not match, or bad settings.
-  VideoFolderWriter(const std::filesystem::path& out, int width, int height, const EncoderSettings& settings,
+  VideoFolderWriter(const std::filesystem::path& out, int width, int height, const LiveEncoderSettings& encoder,
                     const std::optional<std::filesystem::path>& calibration = {});
   ~VideoFolderWriter();  // finishes the files if finish() was not called (errors are swallowed there)
   VideoFolderWriter(const VideoFolderWriter&) = delete;
@@ -38,11 +40,14 @@ class VideoFolderWriter {
   std::int64_t frames() const { return frames_; }
   std::int64_t videoBytes() const { return video_bytes_; }  // compressed payload so far, both cameras
   const std::filesystem::path& folder() const { return out_; }
+  // The encoder chosen, one line ("encoder: x264 (libx264, 1000 kbit/s, GOP 120)").
+  const std::string& encoderDescription() const { return encoder_description_; }
 
  private:
   void writePackets(std::size_t camera, std::span<const EncodedPacket> packets);
 
   std::filesystem::path out_;
+  std::string encoder_description_;
   std::array<VideoEncoder, 2> encoders_;
   std::array<std::unique_ptr<Mp4Writer>, 2> writers_;
   std::array<std::ofstream, 2> csv_;
@@ -60,10 +65,11 @@ struct RecordReport {
   SourceCounters source;       // frames the cameras lost or could not pair
   bool stopped = false;        // stop_requested ended it (not the source)
   std::string error;           // the source failed (a device vanished): what it said; the folder is still finished
+  std::string encoder;         // the encoder chosen, one line
 };
 
 struct RecordOptions {
-  EncoderSettings settings = liveEncoderSettings({});
+  LiveEncoderSettings encoder;  // kind, bitrate, GOP, frame rate; headers are put out of band for the .mp4
   std::optional<std::filesystem::path> calibration;
   std::function<bool()> stop_requested;               // polled between frames
   std::function<void(const RecordReport&)> progress;  // after every frame

@@ -50,8 +50,7 @@ StreamResult runStream(const StreamOptions& options) {
 
   encode::LiveEncoderSettings live = options.encoder;
   const double rate = info.nominal_rate_hz > 0.0 ? info.nominal_rate_hz : 20.0;
-  live.fps_num = static_cast<int>(std::lround(rate * 1000.0));
-  live.fps_den = 1000;
+  encode::setFrameRate(live, rate);
   encode::silenceCodecLogs();
   std::array<encode::VideoEncoder, 2> encoders;
   StreamResult result;

@@ -69,10 +69,12 @@ VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, capture:
 
 CameraRecordResult recordFromCameras(const CameraRecordOptions& options, capture::V4l2Io& io) {
   const std::unique_ptr<StereoSource> source = openCameras(options.cameras, io);
-  encode::LiveEncodeOptions encode = options.encode;
-  if (encode.fps <= 0.0) encode.fps = source->info().nominal_rate_hz > 0.0 ? source->info().nominal_rate_hz : 30.0;
+  const double fps = options.fps > 0.0                      ? options.fps
+                     : source->info().nominal_rate_hz > 0.0 ? source->info().nominal_rate_hz
+                                                            : 30.0;
   encode::RecordOptions record;
-  record.settings = encode::liveEncoderSettings(encode);
+  record.encoder = options.encoder;
+  encode::setFrameRate(record.encoder, fps);
   record.calibration = options.calibration;
   record.stop_requested = options.stop_requested;
   record.progress = options.progress;

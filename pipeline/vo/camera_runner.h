@@ -38,7 +38,8 @@ struct CameraRecordOptions {
   capture::StereoCameraOptions cameras;
   std::filesystem::path out;
   std::optional<std::filesystem::path> calibration;  // copied in as calib.json (checked against the frames)
-  encode::LiveEncodeOptions encode;                  // fps 0: the cameras' rate (30 when they report none)
+  encode::LiveEncoderSettings encoder;               // its frame rate is set from fps
+  double fps = 0.0;                                  // 0: the cameras' rate (30 when they report none)
   std::function<bool()> stop_requested;
   std::function<void(const encode::RecordReport&)> progress;
 };

@@ -10,6 +10,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
+#include "tools/voca/encoder_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -18,7 +19,8 @@ using voca::cli::Runner;
 
 struct RecordCli {
   voca::cli::CameraCli camera;
-  std::string out, calib, bitrate = "2M", encoder = "x264";
+  voca::cli::EncoderCli encoder;
+  std::string out, calib;
 };
 
 double megabytes(std::int64_t bytes) { return static_cast<double>(bytes) / 1e6; }
@@ -28,9 +30,8 @@ int runRecord(const RecordCli& o) {
   options.cameras = voca::cli::applyCameraOptions(o.camera);
   options.out = o.out;
   if (!o.calib.empty()) options.calibration = o.calib;
-  options.encode.encoder = o.encoder;
-  options.encode.bitrate_bps = voca::encode::parseBitrate(o.bitrate);
-  options.encode.fps = o.camera.fps;
+  options.encoder = voca::cli::liveEncoderSettings(o.encoder);
+  options.fps = o.camera.fps;
   voca::platform::installStopHandlers();
   options.stop_requested = voca::platform::stopRequested;
   options.progress = [](const voca::encode::RecordReport& r) {
@@ -46,6 +47,7 @@ int runRecord(const RecordCli& o) {
     fmt::print(stderr, "warning: no --calib: the folder has no calib.json; pass --calib to `voca run` later\n");
   }
   fmt::print("input: {}\n", result.description);
+  if (!r.encoder.empty()) fmt::print("{}\n", r.encoder);
   fmt::print("recorded: {} stereo frames, {:.2f} s\n", r.frames,
              static_cast<double>(r.last_t_ns - r.first_t_ns) * 1e-9);
   fmt::print("video: {:.2f} MB for {:.2f} MB of raw 8-bit frames ({:.0f}x smaller)\n", megabytes(r.video_bytes),
@@ -71,11 +73,11 @@ const bool registered = voca::cli::registerCommand({
       voca::cli::addCameraOptions(app, o->camera);
       app.add_option("--out,-o", o->out, "Folder to create (mav0/cam0, mav0/cam1, calib.json)")->required();
       app.add_option("--calib", o->calib, "Stereo calibration of the cameras, copied into the folder as calib.json");
-      app.add_option("--bitrate", o->bitrate, "Target bitrate per camera (e.g. 500k, 2M)")->capture_default_str();
-      app.add_option("--encoder", o->encoder, "Encoder: x264")->capture_default_str();
+      voca::cli::addEncoderOptions(app, o->encoder);
       app.footer(voca::cli::cameraHelpFooter() + "\n\n" +
                  "Each camera is encoded as it is captured with the causal low-latency settings (one pass, no\n"
-                 "B-frames, one reference frame, no look-ahead, 10 s keyframe interval); data.csv keeps every\n"
+                 "B-frames, one reference frame, no look-ahead, a keyframe every --gop frames), on the board's\n"
+                 "hardware encoder when there is one (--encoder auto); data.csv keeps every\n"
                  "frame's capture timestamp. Ctrl-C (or --frames) ends the recording and leaves a complete,\n"
                  "playable folder (exit 0); a camera failing mid-recording keeps what was recorded (exit 1).");
       return [o] { return runRecord(*o); };
