@@ -10,3 +10,7 @@ add_dependencies(test_pipeline_e2e voca)
 # demuxer and decoder allocate, which the test counts exactly.
 voca_add_test(test_pipeline_alloc SOURCES test_pipeline_alloc.cpp
               LIBS voca_pipeline_vo voca_drivers_source voca_drivers_encode voca_calib TIMEOUT 300)
+# The decode stage in the live runner (4 slots) with a real decoder that returns no picture for
+# many packets (stream joined after its keyframe, lost packets): every slot comes back, no hang.
+voca_add_test(test_decode_stage SOURCES test_decode_stage.cpp
+              LIBS voca_pipeline_stages voca_drivers_encode LABELS asan TIMEOUT 120)

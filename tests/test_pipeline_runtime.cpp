@@ -5,6 +5,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <random>
@@ -83,6 +84,31 @@ class RecordingSink final : public Stage {
   bool finished = false;
 };
 
+// Keeps as many slots as the runner allows and forwards the oldest beyond that, like a decoder
+// stage waiting for pictures held back inside its decoder.
+class HoldingStage final : public Stage {
+ public:
+  std::string_view name() const override { return "decode"; }
+  void start(const StageContext& context) override { limit = context.maxHeldSlots(); }
+  void process(FrameSlot& slot, Emitter& out) override {
+    held_.push_back(&slot);
+    max_held = std::max(max_held, static_cast<int>(held_.size()) - 1);  // kept after the call
+    while (static_cast<int>(held_.size()) > limit) {
+      out.forward(*held_.front());
+      held_.erase(held_.begin());
+    }
+  }
+  void finish(Emitter& out) override {
+    for (FrameSlot* slot : held_) out.forward(*slot);
+    held_.clear();
+  }
+  int limit = -1;
+  int max_held = 0;
+
+ private:
+  std::vector<FrameSlot*> held_;
+};
+
 bool strictlyIncreasing(const std::vector<std::int64_t>& v) {
   for (std::size_t i = 1; i < v.size(); ++i) {
     if (v[i] <= v[i - 1]) return false;
@@ -113,6 +139,41 @@ TEST_CASE("pipeline: offline policy keeps all 20000 frames in order, in every th
     CHECK(sink.finished);
     CHECK(report.end_to_end.count() == kFrames);
     for (const StageReport& s : report.stages) CHECK(s.service.count() == kFrames);
+  }
+}
+
+TEST_CASE("pipeline: a stage holding as many slots as the runner allows never starves the source") {
+  // A stage may hold maxHeldSlots() slots between calls; the source must still get one to bring the
+  // frame that lets the oldest go (holding the whole pool is the hang this guards against).
+  constexpr std::int64_t kFrames = 2000;
+  for (const int pool : {1, 2, 4, 8}) {
+    for (const int threads : {1, 0}) {
+      for (const bool live : {false, true}) {
+        CAPTURE(pool);
+        CAPTURE(threads);
+        CAPTURE(live);
+        CountingSource source(kFrames);
+        HoldingStage hold;
+        DelayStage frontend("frontend", 0, 1, true);
+        RecordingSink sink;
+        PipelineOptions options;
+        options.threads = threads;
+        options.live_policy = live;
+        options.pool_size = pool;
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+        options.stop_requested = [deadline] { return std::chrono::steady_clock::now() > deadline; };
+        Pipeline pipeline(source, {&hold, &frontend, &sink}, options);
+        const RunReport report = pipeline.run();
+        CHECK_FALSE(report.stopped);
+        CHECK_FALSE(report.error);
+        CHECK(hold.limit == pool - 1);
+        CHECK(hold.max_held == pool - 1);
+        CHECK(report.produced == kFrames);
+        CHECK(report.completed + report.dropped == kFrames);
+        CHECK(strictlyIncreasing(sink.indices));
+        if (!live) CHECK(report.completed == kFrames);
+      }
+    }
   }
 }
 

@@ -206,9 +206,11 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
       Pending& right = s.pending[1].front();
       if (left.stamp.frame_index == right.stamp.frame_index && left.stamp.t_ns == right.stamp.t_ns) {
         const std::int64_t index = left.stamp.frame_index;
-        // After a gap the decoders would conceal what the lost pictures should have provided (and
-        // a concealing decoder may hold pictures back); they restart cleanly at the next keyframe
-        // of both cameras instead. The pairs skipped until then count as lost.
+        // After a gap the P-frames reference pictures that never arrived: libavcodec's H.264
+        // decoder substitutes an older picture and returns them unflagged (wrong pixels and motion
+        // vectors for one camera of a stereo pair) or withholds them until the next keyframe. For
+        // accuracy the decoders restart cleanly at the next keyframe of both cameras instead (the
+        // decode stage copes with withheld pictures either way). The pairs skipped count as lost.
         const bool continuous = s.last_index >= 0 && index == s.last_index + 1;
         if (!continuous && !(left.idr && right.idr)) {
           s.pending[0].pop();

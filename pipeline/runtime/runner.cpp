@@ -104,6 +104,7 @@ struct Pipeline::Impl final : StageContext {
   int numStages() const { return static_cast<int>(stages.size()) + 1; }
   int lastStage() const { return numStages() - 1; }
   bool aborting() const override { return failed_stage.load(std::memory_order_acquire) >= 0; }
+  int maxHeldSlots() const override { return std::max(static_cast<int>(pool.size()) - 1, 0); }
 
   void fail(int stage, const FrameSlot* slot, const std::string& message) {
     if (!error_claimed.exchange(true)) {

@@ -38,6 +38,10 @@ class StageContext {
   // True once a stage failed or the run is being torn down: a stage waiting for something that
   // will never come (e.g. a depth hint from a failed backend) gives up and releases its slot.
   virtual bool aborting() const = 0;
+  // How many slots a stage may keep between process() calls (the pool's size less one). A stage
+  // holding every slot would leave the source none to bring the input it waits for (a decoder
+  // holding pictures back until it gets more packets): it must give the oldest up first.
+  virtual int maxHeldSlots() const = 0;
 
  protected:
   ~StageContext() = default;
@@ -55,7 +59,9 @@ class Stage {
   virtual int relativeCost() const { return 1; }
   virtual void start(const StageContext& /*context*/) {}
   // Handles one frame: calls out.forward() for each slot that goes on (zero or more, in order; a
-  // stage may hold a slot and forward it later) or out.release().
+  // stage may hold up to context.maxHeldSlots() slots and forward them later) or out.release().
+  // When it throws, the stage has sent on or released every slot it held except `slot`, which the
+  // runner releases unless the stage handed it on.
   virtual void process(FrameSlot& slot, Emitter& out) = 0;
   virtual void finish(Emitter& /*out*/) {}
 };

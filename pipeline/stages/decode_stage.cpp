@@ -27,6 +27,12 @@ struct DecodeStage::Impl {
   };
 
   DecodeStageOptions options;
+  // Frames whose pictures may still be inside the decoders; more would starve the source (set from
+  // the runner in start()).
+  std::size_t max_held = kMaxPending - 1;
+  // Per camera, the pts of the newest frame whose picture came out or was given up: a picture at or
+  // before it comes too late (the device returned it out of order, or after the stage gave up).
+  std::array<std::int64_t, 2> settled_pts{decode::kNoPts, decode::kNoPts};
   std::array<std::unique_ptr<decode::VideoDecoder>, 2> decoders;
   std::array<decode::DecodedFrame, 2> scratch;
   std::array<Pending, kMaxPending> pending;  // a ring, oldest at head
@@ -34,8 +40,14 @@ struct DecodeStage::Impl {
 
   Pending& at(std::size_t i) { return pending[(head + i) % kMaxPending]; }
 
+  void settle(Pending& p, int camera) {
+    const auto c = static_cast<std::size_t>(camera);
+    p.resolved[c] = true;
+    if (p.pts[c] != decode::kNoPts) settled_pts[c] = std::max(settled_pts[c], p.pts[c]);
+  }
+
   void markDamaged(Pending& p, int camera, const std::string& why) {
-    p.resolved[static_cast<std::size_t>(camera)] = true;
+    settle(p, camera);
     if (!p.damaged) p.why = fmt::format("{}: {}", options.names[static_cast<std::size_t>(camera)], why);
     p.damaged = true;
   }
@@ -54,6 +66,9 @@ struct DecodeStage::Impl {
       }
     }
     if (target == size) {
+      if (picture.pts != decode::kNoPts && settled_pts[c] != decode::kNoPts && picture.pts <= settled_pts[c]) {
+        return;  // its frame was already given up: the picture comes too late to be used
+      }
       throw RuntimeFailure(
           fmt::format("{}: the decoder produced a picture (pts {}) for no packet sent", options.names[c], picture.pts));
     }
@@ -61,13 +76,16 @@ struct DecodeStage::Impl {
       if (!at(i).resolved[c]) markDamaged(at(i), camera, "its picture never came out of the decoder (damaged data)");
     }
     Pending& p = at(target);
-    p.resolved[c] = true;
+    settle(p, camera);
     DecodedStereoFrame& frame = p.slot->frame;
     // Hand the decoded buffers over without copying; the decoder keeps the slot's old ones.
     std::swap(frame.images[c], picture.luma);
     std::swap(frame.motion[c], picture.motion);
     if (picture.damaged) markDamaged(p, camera, "damaged or missing bitstream data (concealed by the decoder)");
   }
+
+  void decode(FrameSlot& slot, Emitter& out);
+  void finish(Emitter& out);
 
   void drain(int camera) {
     decode::DecodedFrame& picture = scratch[static_cast<std::size_t>(camera)];
@@ -76,6 +94,10 @@ struct DecodeStage::Impl {
 
   void emitReady(Emitter& out) {
     while (size > 0 && at(0).resolved[0] && at(0).resolved[1]) {
+      if (at(0).damaged && options.decoder.strict) {
+        // Thrown with the frame still held, so that releaseHeld() hands its slot back.
+        throw InputError(fmt::format("frame {} is damaged ({})", at(0).slot->frameIndex(), at(0).why));
+      }
       Pending p = std::move(at(0));
       at(0) = Pending{};
       head = (head + 1) % kMaxPending;
@@ -83,12 +105,40 @@ struct DecodeStage::Impl {
       if (!p.damaged) {
         p.slot->frame.has_motion = options.decoder.export_motion;
         out.forward(*p.slot);
-      } else if (options.decoder.strict) {
-        throw InputError(fmt::format("frame {} is damaged ({})", p.slot->frameIndex(), p.why));
       } else {
         out.release(*p.slot, ReleaseReason::kDamaged);
       }
     }
+  }
+
+  // A decoder outputs nothing for a packet it cannot decode yet: after lost reference data
+  // libavcodec's H.264 decoder waits for the next keyframe, and hardware decoders hold a few
+  // pictures. Only more packets bring those pictures out, and packets come in slots: the oldest frame
+  // is given up (skipped as damaged, like a picture that never comes out) before the stage holds so
+  // many slots that the source has none left to fill.
+  void giveUpBeyond(std::size_t limit, Emitter& out) {
+    while (size > limit) {
+      for (int c = 0; c < 2; ++c) {
+        if (!at(0).resolved[static_cast<std::size_t>(c)]) {
+          markDamaged(at(0), c,
+                      fmt::format("its picture had not come out of the decoder after {} more packets "
+                                  "(undecodable until the next keyframe after lost data?)",
+                                  size - 1));
+        }
+      }
+      emitReady(out);
+    }
+  }
+
+  // The stage failed: every slot it holds goes back, except `current`, which the runner releases.
+  void releaseHeld(const FrameSlot* current, Emitter& out) noexcept {
+    for (std::size_t i = 0; i < size; ++i) {
+      Pending& p = at(i);
+      if (p.slot != current) out.release(*p.slot, ReleaseReason::kAborted);
+      p = Pending{};
+    }
+    head = 0;
+    size = 0;
   }
 };
 
@@ -105,11 +155,32 @@ DecodeStage::~DecodeStage() = default;
 
 const std::string& DecodeStage::description() const { return impl_->decoders[0]->description(); }
 
+void DecodeStage::start(const StageContext& context) {
+  impl_->max_held = std::min(kMaxPending - 1, static_cast<std::size_t>(std::max(context.maxHeldSlots(), 0)));
+}
+
 void DecodeStage::process(FrameSlot& slot, Emitter& out) {
   Impl& d = *impl_;
-  if (d.size == kMaxPending) {
-    throw RuntimeFailure(fmt::format("the decoders hold back more than {} frames", kMaxPending));
+  try {
+    d.decode(slot, out);
+  } catch (...) {
+    d.releaseHeld(&slot, out);
+    throw;
   }
+}
+
+void DecodeStage::finish(Emitter& out) {
+  Impl& d = *impl_;
+  try {
+    d.finish(out);
+  } catch (...) {
+    d.releaseHeld(nullptr, out);
+    throw;
+  }
+}
+
+void DecodeStage::Impl::decode(FrameSlot& slot, Emitter& out) {
+  Impl& d = *this;
   Impl::Pending& p = d.at(d.size++);
   p = Impl::Pending{};
   p.slot = &slot;
@@ -125,10 +196,11 @@ void DecodeStage::process(FrameSlot& slot, Emitter& out) {
     d.drain(c);
   }
   d.emitReady(out);
+  d.giveUpBeyond(d.max_held, out);
 }
 
-void DecodeStage::finish(Emitter& out) {
-  Impl& d = *impl_;
+void DecodeStage::Impl::finish(Emitter& out) {
+  Impl& d = *this;
   for (int c = 0; c < 2; ++c) {
     d.decoders[static_cast<std::size_t>(c)]->sendEnd();
     d.drain(c);

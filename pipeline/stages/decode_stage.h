@@ -1,9 +1,12 @@
 #pragma once
 // The decode stage: both cameras' packets -> one DecodedStereoFrame (Y planes, motion fields,
-// picture types). Decoders may hold pictures back (hardware decoders do), so the stage keeps the
-// slots whose pictures have not come out yet and forwards them in order as both cameras' pictures
-// arrive, matched by pts. A picture that is missing or flagged damaged makes its frame damaged: it
-// is skipped and counted (the tracker resumes on the next decodable frame), or, in strict mode,
+// picture types). Decoders may hold pictures back (hardware decoders do; libavcodec's H.264 decoder
+// outputs nothing after lost reference data until the next keyframe), so the stage keeps the slots
+// whose pictures have not come out yet and forwards them in order as both cameras' pictures arrive,
+// matched by pts. It never keeps more slots than the runner allows (StageContext::maxHeldSlots): the
+// source needs a free one to bring the packets that let the pictures out, so the oldest frame is
+// given up first. A picture that is missing, given up or flagged damaged makes its frame damaged:
+// it is skipped and counted (the tracker resumes on the next decodable frame), or, in strict mode,
 // stops the run with an error naming the camera and frame.
 
 #include <array>
@@ -25,6 +28,7 @@ class DecodeStage final : public Stage {
   DecodeStage(const std::array<decode::StreamInfo, 2>& streams, const DecodeStageOptions& options);
   ~DecodeStage() override;
   std::string_view name() const override { return "decode"; }
+  void start(const StageContext& context) override;
   void process(FrameSlot& slot, Emitter& out) override;
   void finish(Emitter& out) override;
 
