@@ -118,6 +118,19 @@ struct VideoDecoder::Impl {
   std::int64_t last_packet = -1;
   bool format_checked = false;
 
+  // What both constructors do first: the stream, options and name, the codec check, the buffers.
+  void init(const StreamInfo& stream_info, const DecoderOptions& decoder_options, std::string source_name) {
+    stream = stream_info;
+    options = decoder_options;
+    source = std::move(source_name);
+    if (stream.codec == VideoCodec::kOther) {
+      throw InputError(source + ": codec '" + stream.codec_name + "' is not supported (H.264, MPEG-4 Part 2, MPEG-2)");
+    }
+    frame.reset(av_frame_alloc());
+    transfer.reset(av_frame_alloc());
+    packet.reset(av_packet_alloc());
+    if (!frame || !transfer || !packet) throw RuntimeFailure("out of memory allocating decoder buffers");
+  }
   CodecPtr allocContext(const AVCodec* codec) const;
   CodecPtr openSoftware(bool motion_only) const;
   CodecPtr openVaapi();
@@ -305,16 +318,7 @@ VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& optio
                            std::string source_name)
     : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
-  d.stream = stream;
-  d.options = options;
-  d.source = std::move(source_name);
-  if (stream.codec == VideoCodec::kOther) {
-    throw InputError(d.source + ": codec '" + stream.codec_name + "' is not supported (H.264, MPEG-4 Part 2, MPEG-2)");
-  }
-  d.frame.reset(av_frame_alloc());
-  d.transfer.reset(av_frame_alloc());
-  d.packet.reset(av_packet_alloc());
-  if (!d.frame || !d.transfer || !d.packet) throw RuntimeFailure("out of memory allocating decoder buffers");
+  d.init(stream, options, std::move(source_name));
 
   if (!options.decode_pixels) {
     d.choice.backend = DecoderBackend::kSoftware;
@@ -340,18 +344,9 @@ VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& optio
 VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& options,
                            std::unique_ptr<PixelDecoder> pixels, std::string source_name)
     : impl_(std::make_unique<Impl>()) {
-  Impl& d = *impl_;
-  d.stream = stream;
-  d.options = options;
-  d.source = std::move(source_name);
   if (!pixels) throw std::invalid_argument("VideoDecoder: null pixel decoder");
-  if (stream.codec == VideoCodec::kOther) {
-    throw InputError(d.source + ": codec '" + stream.codec_name + "' is not supported (H.264, MPEG-4 Part 2, MPEG-2)");
-  }
-  d.frame.reset(av_frame_alloc());
-  d.transfer.reset(av_frame_alloc());
-  d.packet.reset(av_packet_alloc());
-  if (!d.frame || !d.transfer || !d.packet) throw RuntimeFailure("out of memory allocating decoder buffers");
+  Impl& d = *impl_;
+  d.init(stream, options, std::move(source_name));
   d.options.decode_pixels = true;
   // Reported as hardware: that is what the stand-in stands for.
   d.choice.backend = options.backend == DecoderBackend::kAuto || options.backend == DecoderBackend::kSoftware
