@@ -15,10 +15,15 @@ constexpr int kMaxPackets = 48;
 
 void consume(voca::decode::DecodedFrame& frame, voca::IFrameBridge& bridge) {
   frame.motion.flagOutliers();
-  bridge.apply(frame.motion);
-  // Every block lookup inside the frame must stay in bounds.
+  bool bridged = false;
+  const voca::MotionField* prior = bridge.prior(frame.motion, 0, bridged);
+  // Every block lookup inside the frame, in its own field and in the prior the tracker would use,
+  // must stay in bounds.
   for (int y = 0; y < frame.motion.height(); y += 7) {
-    for (int x = 0; x < frame.motion.width(); x += 7) (void)frame.motion.blockAt(x, y);
+    for (int x = 0; x < frame.motion.width(); x += 7) {
+      (void)frame.motion.blockAt(x, y);
+      if (prior != nullptr) (void)prior->blockAt(x, y);
+    }
   }
 }
 
