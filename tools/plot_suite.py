@@ -100,6 +100,17 @@ def plot_bitrate(summary, out_dir):
     return save(fig, out_dir, "bitrate")
 
 
+def load_statistics(row):
+    """A successful run's statistics JSON, or None when the run failed or its file is missing or unreadable."""
+    if row["status"] != "ok" or not row.get("statistics"):
+        return None
+    try:
+        with open(row["statistics"]) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
 def histogram(stats_json, key):
     h = stats_json.get("frontend", {}).get(key)
     if not h:
@@ -112,12 +123,8 @@ def plot_guess_distance(results, out_dir):
     previous, prior = {}, {}
     bin_px = None
     for row in results:
-        if row["status"] != "ok" or row.get("mode") in ("", "none") or not row.get("statistics"):
-            continue
-        try:
-            with open(row["statistics"]) as f:
-                stats = json.load(f)
-        except (OSError, ValueError):
+        stats = None if row.get("mode") in ("", "none") else load_statistics(row)
+        if stats is None:
             continue
         for key, target in (("guess_distance_previous", previous), ("guess_distance_prior", prior)):
             h = histogram(stats, key)
@@ -243,12 +250,8 @@ def plot_stage_times(results, out_dir):
     """Mean per-frame time of each stage per system, over its successful runs."""
     sums = {}
     for row in results:
-        if row["status"] != "ok" or not row.get("statistics"):
-            continue
-        try:
-            with open(row["statistics"]) as f:
-                stats = json.load(f)
-        except (OSError, ValueError):
+        stats = load_statistics(row)
+        if stats is None:
             continue
         columns = stats.get("frame_columns", [])
         wanted = [c for c in ("decode_ms", "frontend_ms", "backend_ms") if c in columns]
