@@ -6,8 +6,8 @@
 #include <set>
 
 #include "tests/test_support.h"
-#include "tools/harness/suite.h"
-#include "tools/harness/table_format.h"
+#include "pipeline/harness/suite.h"
+#include "pipeline/harness/table_format.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -1,4 +1,4 @@
-// `voca bench suite` and `voca bench collect`: options and printing; the work is in tools/harness.
+// `voca bench suite` and `voca bench collect`: options and printing; the work is in pipeline/harness.
 
 #include "tools/voca/bench_suite.h"
 
@@ -9,8 +9,8 @@
 
 #include "platform/process/child_process.h"
 #include "platform/realtime/stop_signal.h"
-#include "tools/harness/run_suite.h"
-#include "tools/harness/suite.h"
+#include "pipeline/harness/run_suite.h"
+#include "pipeline/harness/suite.h"
 #include "voca/core/error.h"
 
 namespace voca::cli {

@@ -1,4 +1,4 @@
-#include "tools/harness/suite.h"
+#include "pipeline/harness/suite.h"
 
 #include <algorithm>
 #include <fstream>

@@ -14,7 +14,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "platform/process/child_process.h"
-#include "tools/harness/suite.h"
+#include "pipeline/harness/suite.h"
 
 namespace voca::harness {
 

@@ -1,4 +1,4 @@
-#include "tools/harness/table_format.h"
+#include "pipeline/harness/table_format.h"
 
 #include <fmt/core.h>
 

@@ -1,4 +1,4 @@
-#include "tools/harness/run_suite.h"
+#include "pipeline/harness/run_suite.h"
 
 #include <algorithm>
 #include <chrono>
@@ -13,7 +13,7 @@
 
 #include "drivers/dataset/dataset.h"
 #include "pipeline/vo/vo_runner.h"
-#include "tools/harness/table_format.h"
+#include "pipeline/harness/table_format.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
 #include "voca/trajectory/trajectory.h"
