@@ -129,3 +129,26 @@ TEST_CASE("backend e2e: KITTI 06, first 51 frames, ATE at Basalt's level (0.12 m
   // frontend changes of a few tracks do not flip it, while anything clearly worse than Basalt fails.
   CHECK(report.ate.stats.rmse < 0.125);
 }
+
+TEST_CASE("backend e2e: --encode keeps the recording's ground truth; a KITTI --gt file takes the sequence's times") {
+  const auto data = test::sharedData("kitti06_first51/sequences/06");
+  if (!data) return;
+  test::ScratchDir dir("backend-e2e-kitti-gt");
+  for (const bool explicit_gt : {false, true}) {
+    pipeline::VoRunOptions options;
+    options.input = *data;
+    options.trajectory_file = dir / "traj.txt";
+    options.encode_bitrate_bps = 500000;
+    options.max_frames = 12;
+    options.progress = false;
+    if (explicit_gt) options.ground_truth = *data / ".." / ".." / "poses" / "06.txt";
+    const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+    REQUIRE_FALSE(result.pipeline.error);
+    INFO("explicit --gt: " << explicit_gt);
+    // Before, the temporary encoding had no ground truth and a KITTI poses file given with --gt had
+    // no timestamps to associate: either way no ATE.
+    REQUIRE(result.eval);
+    CHECK(result.eval->ate.stats.count == 12);
+    CHECK(result.eval->ate.stats.rmse < 0.2);
+  }
+}

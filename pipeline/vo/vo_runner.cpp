@@ -192,11 +192,16 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);
   std::optional<Trajectory> gt;
   std::string gt_name;
+  // Ground truth belongs to the recording, not to the temporary encoding of it. A KITTI poses file
+  // carries no timestamps: it takes the sequence's times.txt, as the dataset's own would.
   if (options.ground_truth) {
-    gt = loadTrajectory(*options.ground_truth);
+    const bool kitti_poses = raw.layout == DatasetLayout::kKitti &&
+                             detectTrajectoryFormat(*options.ground_truth) == TrajectoryFormat::kKitti;
+    gt = kitti_poses ? loadTrajectory(*options.ground_truth, TrajectoryFormat::kKitti, raw.root / "times.txt")
+                     : loadTrajectory(*options.ground_truth);
     gt_name = options.ground_truth->string();
-  } else if ((gt = loadDatasetGroundTruth(dataset))) {
-    gt_name = dataset.ground_truth->string();
+  } else if ((gt = loadDatasetGroundTruth(raw))) {
+    gt_name = raw.ground_truth->string();
   }
   VoRunResult run = runVisualOdometryOn(*source, rig, result.config, options, gt, gt_name);
   run.config_name = result.config_name;
