@@ -3,42 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "voca/image/draw.h"
+
 namespace voca::pipeline {
-
-namespace {
-
-void putPixel(RgbImage& image, int x, int y, Rgb8 colour) {
-  if (x >= 0 && y >= 0 && x < image.width() && y < image.height()) image(x, y) = colour;
-}
-
-void drawLine(RgbImage& image, Eigen::Vector2f a, Eigen::Vector2f b, Rgb8 colour) {
-  const float length = (b - a).norm();
-  const int steps = std::max(1, static_cast<int>(std::ceil(length)));
-  if (steps > 4 * (image.width() + image.height())) return;  // a lost point far outside: not worth drawing
-  for (int i = 0; i <= steps; ++i) {
-    const Eigen::Vector2f p = a + (b - a) * (static_cast<float>(i) / static_cast<float>(steps));
-    putPixel(image, static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())), colour);
-  }
-}
-
-void drawCross(RgbImage& image, Eigen::Vector2f p, int r, Rgb8 colour) {
-  const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
-  for (int d = -r; d <= r; ++d) {
-    putPixel(image, x + d, y + d, colour);
-    putPixel(image, x + d, y - d, colour);
-  }
-}
-
-void drawCircle(RgbImage& image, Eigen::Vector2f p, float r, Rgb8 colour) {
-  const int n = static_cast<int>(std::ceil(2.f * 3.14159f * r));
-  for (int i = 0; i < n; ++i) {
-    const float a = 2.f * 3.14159265f * static_cast<float>(i) / static_cast<float>(n);
-    putPixel(image, static_cast<int>(std::lround(p.x() + r * std::cos(a))),
-             static_cast<int>(std::lround(p.y() + r * std::sin(a))), colour);
-  }
-}
-
-}  // namespace
 
 void renderTrackOverlay(const GrayImage& left, std::span<const PointTrace> traces,
                         std::span<const KeypointObservation> observations, RgbImage& out) {

@@ -17,19 +17,9 @@
 #include "platform/realtime/clock.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 
 namespace voca::pipeline {
-
-namespace {
-
-double percentile(std::vector<double>& values, double q) {
-  if (values.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(values.size() - 1)));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
-
-}  // namespace
 
 StreamResult runStream(const StreamOptions& options) {
   if (!(options.speed > 0.0))
@@ -107,8 +97,8 @@ StreamResult runStream(const StreamOptions& options) {
   }
   writer.finish();
   if (result.frames > 0) result.seconds = static_cast<double>(platform::monotonicNs() - origin_mono) * 1e-9;
-  result.encode_ms_p50 = percentile(encode_ms, 0.5);
-  result.encode_ms_p99 = percentile(encode_ms, 0.99);
+  result.encode_ms_p50 = quantileInPlace(encode_ms, 0.5);
+  result.encode_ms_p99 = quantileInPlace(encode_ms, 0.99);
   result.encode_ms_max = encode_ms.empty() ? 0.0 : *std::max_element(encode_ms.begin(), encode_ms.end());
   if (stop_requested()) result.stop_signal = platform::stopSignal();
   return result;

@@ -19,6 +19,7 @@
 #include "platform/realtime/thread_control.h"
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 
 namespace voca::cli {
 
@@ -53,12 +54,6 @@ void resetPeakRss() {
   malloc_trim(0);
 #endif
   std::ofstream("/proc/self/clear_refs") << "5";
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 int runPipelineBench(const PipelineBenchOptions& opts) {
@@ -114,9 +109,9 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
   fmt::print("offline throughput, decode included (median of {} runs, wall clock):\n", opts.repeat);
   for (const Layout& layout : layouts) {
     fmt::print("  {:<32} {:7.1f} stereo frames/s  ({} threads; peak RSS {:.0f} MiB)\n", layout.label,
-               median(layout.fps), layout.last.pipeline.threads, layout.rss);
+               voca::median(layout.fps), layout.last.pipeline.threads, layout.rss);
   }
-  const double speedup = median(layouts[1].fps) / std::max(median(layouts[0].fps), 1e-9);
+  const double speedup = voca::median(layouts[1].fps) / std::max(voca::median(layouts[0].fps), 1e-9);
   fmt::print("  pipelining speed-up: {:.2f}x (target >= 1.8x on 2 cores; >= 200 frames/s with faster stages)\n",
              speedup);
   fmt::print("where the time goes, staged run (service time per stage):\n");

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
+#include <cstdint>
 #include <fstream>
 #include <functional>
 #include <memory>
@@ -16,12 +16,14 @@
 #include <fmt/core.h>
 
 #include "drivers/decode/video_decoder.h"
+#include "platform/realtime/clock.h"
 #include "tools/voca/bench_backend.h"
 #include "tools/voca/bench_frontend.h"
 #include "tools/voca/bench_pipeline.h"
 #include "tools/voca/bench_suite.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 
 namespace {
 
@@ -57,22 +59,7 @@ void printMachine() {
              std::thread::hardware_concurrency());
 }
 
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
-}
-
 double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-// CPU time of the calling thread: unlike wall time it is not inflated when other processes share the
-// cores, so it measures the work itself.
-double threadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // Wall and CPU time of one timed section, as rates.
 struct RateSamples {
@@ -183,9 +170,9 @@ int runDecodeBench(const DecodeBenchOptions& opts) {
   for (int r = 0; r < opts.repeat; ++r) {
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const auto start = std::chrono::steady_clock::now();
-      const double cpu_start = threadCpuSeconds();
+      const std::int64_t cpu_start_ns = voca::platform::threadCpuNs();
       frames = decodeAll(stream, packets, variants[v].options, frame, nullptr);
-      const double cpu = threadCpuSeconds() - cpu_start;
+      const double cpu = 1e-9 * static_cast<double>(voca::platform::threadCpuNs() - cpu_start_ns);
       const double elapsed = seconds(std::chrono::steady_clock::now() - start);
       fps[v].wall_fps.push_back(frames / std::max(elapsed, 1e-9));
       fps[v].cpu_fps.push_back(frames / std::max(cpu, 1e-9));
@@ -200,10 +187,10 @@ int runDecodeBench(const DecodeBenchOptions& opts) {
       frames, opts.repeat);
   std::vector<double> med(variants.size());
   for (std::size_t v = 0; v < variants.size(); ++v) {
-    med[v] = median(fps[v].cpu_fps);
+    med[v] = voca::median(fps[v].cpu_fps);
     const auto [lo, hi] = std::minmax_element(fps[v].cpu_fps.begin(), fps[v].cpu_fps.end());
     fmt::print("  {:<38} {:7.0f} fps  {:6.3f} ms/frame  (min {:.0f}, max {:.0f}; wall {:.0f} fps)\n", variants[v].label,
-               med[v], 1000.0 / med[v], *lo, *hi, median(fps[v].wall_fps));
+               med[v], 1000.0 / med[v], *lo, *hi, voca::median(fps[v].wall_fps));
   }
   const double overhead_ms = 1000.0 / med[0] - 1000.0 / med[1];
   fmt::print("  MV extraction overhead: {:+.3f} ms/frame ({:+.1f} %), {:.0f} vectors per frame\n", overhead_ms,

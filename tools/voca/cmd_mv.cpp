@@ -18,6 +18,7 @@
 #include "drivers/decode/video_reader.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
+#include "voca/image/draw.h"
 #include "voca/image/png_io.h"
 #include "voca/motion/motion_field.h"
 
@@ -69,43 +70,6 @@ FrameRange parseFrameRange(const std::string& text) {
   return range;
 }
 
-// Drawing on an RGB image, clipped to its bounds.
-void plot(RgbImage& image, int x, int y, Rgb8 colour) {
-  if (x >= 0 && y >= 0 && x < image.width() && y < image.height()) image(x, y) = colour;
-}
-
-void drawLine(RgbImage& image, float x0f, float y0f, float x1f, float y1f, Rgb8 colour) {
-  int x0 = static_cast<int>(std::lround(x0f)), y0 = static_cast<int>(std::lround(y0f));
-  const int x1 = static_cast<int>(std::lround(x1f)), y1 = static_cast<int>(std::lround(y1f));
-  const int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0);
-  const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
-  int err = dx + dy;
-  for (int guard = 0; guard < 100000; ++guard) {  // Bresenham; the guard only bounds absurd vectors
-    plot(image, x0, y0, colour);
-    if (x0 == x1 && y0 == y1) break;
-    const int e2 = 2 * err;
-    if (e2 >= dy) {
-      err += dy;
-      x0 += sx;
-    }
-    if (e2 <= dx) {
-      err += dx;
-      y0 += sy;
-    }
-  }
-}
-
-void drawArrow(RgbImage& image, float x0, float y0, float x1, float y1, Rgb8 colour) {
-  drawLine(image, x0, y0, x1, y1, colour);
-  const float length = std::hypot(x1 - x0, y1 - y0);
-  if (length < 1.5f) return;
-  const float head = std::min(4.0f, 0.4f * length);
-  const float ux = (x0 - x1) / length, uy = (y0 - y1) / length;
-  constexpr float kCos = 0.866f, kSin = 0.5f;  // 30 degree barbs
-  drawLine(image, x1, y1, x1 + head * (kCos * ux - kSin * uy), y1 + head * (kSin * ux + kCos * uy), colour);
-  drawLine(image, x1, y1, x1 + head * (kCos * ux + kSin * uy), y1 + head * (-kSin * ux + kCos * uy), colour);
-}
-
 constexpr Rgb8 kPartitionColour{70, 110, 200};
 constexpr Rgb8 kVectorColour{40, 230, 60};
 constexpr Rgb8 kOutlierColour{255, 40, 40};
@@ -123,8 +87,8 @@ void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage
   // vectors on top; outliers last so they stay visible.
   for (const voca::MotionBlock& b : frame.motion.blocks()) {
     if (b.ref != voca::RefDirection::kPast) continue;
-    for (int x = b.x; x < b.x + b.w; ++x) plot(out, x, b.y, kPartitionColour);
-    for (int y = b.y; y < b.y + b.h; ++y) plot(out, b.x, y, kPartitionColour);
+    for (int x = b.x; x < b.x + b.w; ++x) voca::putPixel(out, x, b.y, kPartitionColour);
+    for (int y = b.y; y < b.y + b.h; ++y) voca::putPixel(out, b.x, y, kPartitionColour);
   }
   for (const bool outliers : {false, true}) {
     for (const voca::MotionBlock& b : frame.motion.blocks()) {
@@ -132,9 +96,9 @@ void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage
       const float cx = b.centreX(), cy = b.centreY();
       const Rgb8 colour = outliers ? kOutlierColour : kVectorColour;
       if (b.dx == 0.f && b.dy == 0.f) {
-        plot(out, static_cast<int>(std::lround(cx)), static_cast<int>(std::lround(cy)), colour);
+        voca::putPixel(out, static_cast<int>(std::lround(cx)), static_cast<int>(std::lround(cy)), colour);
       } else {
-        drawArrow(out, cx, cy, cx + arrow_scale * b.dx, cy + arrow_scale * b.dy, colour);
+        voca::drawArrow(out, {cx, cy}, {cx + arrow_scale * b.dx, cy + arrow_scale * b.dy}, colour);
       }
     }
   }

@@ -19,6 +19,7 @@
 #include "tools/voca/command.h"
 #include "voca/calib/calibration.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 #include "voca/synth/motion.h"
 #include "voca/synth/rigs.h"
 #include "voca/trajectory/trajectory.h"
@@ -293,9 +294,8 @@ int runSynth(const SynthOptions& options) {
   fmt::print(stderr, "voca synth: cam0 image motion per frame: median {:.1f} px, p90 {:.1f} px, max {:.1f} px\n",
              motion.median_px, motion.p90_px, motion.max_px);
   if (!blur_px.empty()) {
-    std::sort(blur_px.begin(), blur_px.end());
     fmt::print(stderr, "voca synth: cam0 motion blur streak ({} ms exposure): median {:.1f} px, max {:.1f} px\n",
-               options.exposure_ms, blur_px[blur_px.size() / 2], blur_px.back());
+               options.exposure_ms, voca::quantileInPlace(blur_px, 0.5), voca::quantileInPlace(blur_px, 1.0));
   }
   return 0;
 }

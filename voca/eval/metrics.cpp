@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 
 namespace voca {
 
@@ -84,8 +85,7 @@ ErrorStats errorStatistics(std::span<const double> errors) {
   std::sort(sorted.begin(), sorted.end());
   stats.min = sorted.front();
   stats.max = sorted.back();
-  const std::size_t mid = sorted.size() / 2;
-  stats.median = sorted.size() % 2 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
+  stats.median = quantileInPlace(sorted, 0.5);
   return stats;
 }
 

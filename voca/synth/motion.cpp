@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "voca/core/quantile.h"
+
 namespace voca::synth {
 
 namespace {
@@ -157,10 +159,9 @@ ImageMotionStats measureImageMotion(const Scene& scene, const RayTable& rays, co
   }
   ImageMotionStats stats;
   if (flow.empty()) return stats;
-  std::sort(flow.begin(), flow.end());
-  stats.median_px = flow[flow.size() / 2];
-  stats.p90_px = flow[std::min(flow.size() - 1, flow.size() * 9 / 10)];
-  stats.max_px = flow.back();
+  stats.median_px = quantileInPlace(flow, 0.5);
+  stats.p90_px = quantileInPlace(flow, 0.9);
+  stats.max_px = quantileInPlace(flow, 1.0);
   return stats;
 }
 
