@@ -13,6 +13,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "voca/eval/results_table.h"
+#include "voca/frontend/frontend_config.h"
 
 namespace voca::harness {
 
@@ -42,7 +43,8 @@ struct Suite {
   std::string name = "suite";
   std::vector<SuiteSequence> sequences;
   std::vector<std::string> bitrates = {"raw", "500k"};  // "raw" or a bitrate such as 500k, 1M
-  std::vector<std::string> modes = {"none", "mv_parallel_of"};
+  std::vector<std::string> modes = {std::string(priorModeName(PriorMode::kNone)),
+                                    std::string(priorModeName(PriorMode::kMvParallelOf))};
   std::vector<bool> bridging = {true};
   std::vector<std::string> configs = {""};  // shipped name or file; "" = the dataset's default
   int frames = 0;                           // 0 = all

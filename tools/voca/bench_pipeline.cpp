@@ -141,7 +141,7 @@ Runner configurePipelineBench(CLI::App& app) {
   auto opts = std::make_shared<PipelineBenchOptions>();
   app.add_option("input", opts->input, "Raw dataset (encoded first at --bitrate) or VOCA video folder")->required();
   app.add_option("--config", opts->config, "Config JSON file or shipped name (default: euroc)");
-  app.add_option("--mode", opts->mode, "Prior mode (default: the config's)");
+  app.add_option("--mode", opts->mode, "Prior mode: " + priorModeList() + " (default: the config's)");
   app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first")->capture_default_str();
   app.add_option("--repeat", opts->repeat, "Offline runs per thread layout")->capture_default_str();
   app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();

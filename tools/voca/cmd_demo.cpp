@@ -82,12 +82,14 @@ int runDemo(const DemoOptions& o) {
   fmt::print(stderr, "[3/4] running the VO on the decoded video: baseline and VOCA\n");
   struct Variant {
     voca::PriorMode mode;
-    const char* label;
+    std::string label;
     voca::pipeline::VoRunResult result;
     fs::path trajectory;
   };
-  std::vector<Variant> variants = {{voca::PriorMode::kNone, "baseline (none)", {}, {}},
-                                   {voca::PriorMode::kMvParallelOf, "VOCA (mv_parallel_of)", {}, {}}};
+  const std::string voca_mode(voca::priorModeName(voca::PriorMode::kMvParallelOf));
+  std::vector<Variant> variants = {
+      {voca::PriorMode::kNone, fmt::format("baseline ({})", voca::priorModeName(voca::PriorMode::kNone)), {}, {}},
+      {voca::PriorMode::kMvParallelOf, fmt::format("VOCA ({})", voca_mode), {}, {}}};
   voca::platform::installStopHandlers();
   for (Variant& v : variants) {
     voca::pipeline::VoRunOptions options;
@@ -103,9 +105,9 @@ int runDemo(const DemoOptions& o) {
     }
   }
 
-  const fs::path overlay = out / "overlay_mv_parallel_of.mp4";
+  const fs::path overlay = out / fmt::format("overlay_{}.mp4", voca_mode);
   fmt::print(stderr, "[4/4] overlay of the VOCA tracks with `voca track --overlay`\n");
-  runSubcommand("track", {video.string(), "--mode", "mv_parallel_of", "--overlay", overlay.string()});
+  runSubcommand("track", {video.string(), "--mode", voca_mode, "--overlay", overlay.string()});
 
   const auto stageMedianMs = [](const voca::pipeline::VoRunResult& r, std::string_view stage) {
     for (const voca::pipeline::StageReport& s : r.pipeline.stages) {

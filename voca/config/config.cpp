@@ -83,9 +83,7 @@ FrontendConfig parseFrontendConfig(const json& section, const std::string& conte
       const std::string text = readString(value, name);
       const auto mode = parsePriorMode(text);
       if (!mode) {
-        throw InputError(fmt::format(
-            "{}: expected one of \"none\", \"mv\", \"of_then_mv\", \"mv_then_of\", \"mv_parallel_of\", got \"{}\"",
-            name, text));
+        throw InputError(fmt::format("{}: expected one of {}, got \"{}\"", name, priorModeList(), text));
       }
       c.prior_mode = *mode;
     } else if (key == "consensus_tolerance_px2") {
