@@ -2,7 +2,6 @@
 // Parameters of the sliding-window VO backend (the JSON "backend" section; defaults are the paper's
 // EuRoC values, Basalt's config.vio_* keys).
 
-#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 namespace voca {
@@ -47,9 +46,5 @@ struct BackendConfig {
 // Checks every value against its allowed range; throws InputError naming `context`.<key>, the
 // allowed range and the value found.
 void validateBackendConfig(const BackendConfig& config, const std::string& context = "backend");
-
-// The "backend" section: every key optional (default above), unknown keys and out-of-range values
-// are InputError naming the key, e.g. "file.json: backend.max_keyframes: expected 2..9, got 12".
-BackendConfig parseBackendConfig(const nlohmann::json& section, const std::string& context);
 
 }  // namespace voca

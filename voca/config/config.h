@@ -1,6 +1,7 @@
 #pragma once
 // The VOCA-RT configuration file: one JSON object with a "frontend" and a "backend" section, each
-// parsed and validated by its own function (unknown keys and out-of-range values are errors).
+// read through its key table by the one section reader (config_section.h) and validated by its
+// component (unknown keys, wrong types and out-of-range values are errors).
 
 #include <filesystem>
 #include <nlohmann/json_fwd.hpp>
@@ -33,5 +34,10 @@ VocaConfig parseConfig(const nlohmann::json& root, const std::string& context);
 // and each value is checked for type and range. `context` names the section in messages, e.g.
 // "file.json: frontend".
 FrontendConfig parseFrontendConfig(const nlohmann::json& section, const std::string& context);
+
+// The "backend" section: every key optional (default = paper value), unknown keys and out-of-range
+// values are InputError naming the key, e.g. "file.json: backend.max_keyframes: expected a value in
+// [2, 9], got 12".
+BackendConfig parseBackendConfig(const nlohmann::json& section, const std::string& context);
 
 }  // namespace voca
