@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Checks that the layers include only downwards (README: folders are the data flow). Every target
+# gets the project root as include path, so the compiler cannot stop voca/ from including a driver
+# by accident; this check does. The rules (a layer must not include the folders listed after it):
+#   voca/     -> drivers/ pipeline/ tools/ platform/   (pure algorithms: no devices, threads, OS)
+#   drivers/  -> pipeline/ tools/
+#   pipeline/ -> tools/
+#   platform/ -> drivers/ pipeline/ tools/
+# Prints every violation as file:line and exits 1 if there is any; 2 on a usage error.
+#
+#   tools/check_layers.sh [source root]     (default: the repository this script is in)
+set -euo pipefail
+
+root=${1:-$(dirname "$0")/..}
+if [[ $# -gt 1 || ! -d "$root" ]]; then
+  echo "usage: $0 [source root]" >&2
+  exit 2
+fi
+cd "$root"
+
+rules=("voca:drivers pipeline tools platform"
+       "drivers:pipeline tools"
+       "pipeline:tools"
+       "platform:drivers pipeline tools")
+
+violations=0
+checked=0
+for rule in "${rules[@]}"; do
+  layer=${rule%%:*}
+  [[ -d "$layer" ]] || continue
+  forbidden=${rule#*:}
+  pattern="^[[:space:]]*#[[:space:]]*include[[:space:]]*[\"<](${forbidden// /|})/"
+  sources=(--include='*.h' --include='*.hpp' --include='*.cpp' --include='*.cc' --include='*.inl')
+  checked=$((checked + $(find "$layer" -type f \( -name '*.h' -o -name '*.hpp' -o -name '*.cpp' -o -name '*.cc' \
+                                  -o -name '*.inl' \) | wc -l)))
+  # One grep per layer: "file:line:text" for every forbidden include.
+  while IFS= read -r hit; do
+    [[ -n "$hit" ]] || continue
+    location=${hit%%:*}
+    rest=${hit#*:}
+    echo "$location:${rest%%:*}: $layer/ must not include ${forbidden// //, }/: ${rest#*:}"
+    violations=$((violations + 1))
+  done < <(grep -rnE "${sources[@]}" "$pattern" "$layer" || true)
+done
+
+if [[ $checked -eq 0 ]]; then
+  echo "$0: no sources found under $(pwd) (expected voca/, drivers/, pipeline/ or platform/)" >&2
+  exit 2
+fi
+if [[ $violations -gt 0 ]]; then
+  echo "$violations include(s) across layers in $checked files" >&2
+  exit 1
+fi
+echo "layers: $checked files, no include across layers"
