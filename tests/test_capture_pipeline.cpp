@@ -117,5 +117,9 @@ TEST_CASE("a camera that disappears mid-run ends the run with the error and ever
   REQUIRE(result.pipeline.error.has_value());
   test::expectError(result.pipeline.error->message, "/dev/video0: the device disappeared after 15 frames");
   CHECK(result.pipeline.produced == 15);
-  CHECK(result.frames == 15);
+  // The live policy may drop a waiting frame when the frontend falls behind (a loaded machine); every
+  // frame taken before the device vanished is estimated or counted dropped, none silently discarded.
+  INFO("completed " << result.pipeline.completed << ", dropped " << result.pipeline.dropped);
+  CHECK(result.frames == result.pipeline.completed);
+  CHECK(result.pipeline.completed + result.pipeline.dropped == 15);
 }
