@@ -73,6 +73,7 @@ VoEstimator::VoEstimator(const BackendConfig& config, const StereoRig& rig)
   T_body_cam0_ = rig.cameras[0].T_body_cam;
   T_cam0_cam_[0] = SE3d();
   T_cam0_cam_[1] = rig.T_cam0_cam1();
+  for (std::size_t c = 0; c < 2; ++c) cam0_cam_[c].set(T_cam0_cam_[c]);
   huber_px_ = config_.obs_huber_thresh_px;
   inv_var_ = 1.0 / (config_.obs_std_dev_px * config_.obs_std_dev_px);
 
@@ -127,6 +128,24 @@ bool VoEstimator::residual(const Landmark& lm, int frame, int cam, Eigen::Vector
   const auto c = static_cast<std::size_t>(cam);
   if (!reprojectLandmark(cameras_[c], frames_[static_cast<std::size_t>(lm.host)].T_w_c,
                          frames_[static_cast<std::size_t>(frame)].T_w_c, T_cam0_cam_[c], lm.s, lm.rho, uv, jac)) {
+    return false;
+  }
+  r = uv - lm.px[static_cast<std::size_t>(frame)][c];
+  return r.allFinite();
+}
+
+VoEstimator::FramePoses VoEstimator::framePoses() const {
+  FramePoses poses;
+  for (std::size_t f = 0; f < poses.size(); ++f) poses[f].set(frames_[f].T_w_c);
+  return poses;
+}
+
+bool VoEstimator::residual(const FramePoses& poses, const Landmark& lm, int frame, int cam, Eigen::Vector2d& r,
+                           ReprojectionJacobians* jac) const {
+  Eigen::Vector2d uv;
+  const auto c = static_cast<std::size_t>(cam);
+  if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)], poses[static_cast<std::size_t>(frame)],
+                         cam0_cam_[c], lm.s, lm.rho, uv, jac)) {
     return false;
   }
   r = uv - lm.px[static_cast<std::size_t>(frame)][c];
@@ -370,7 +389,9 @@ int VoEstimator::triangulateNew(int frame) {
 
 void VoEstimator::optimizePose(int frame) {
   const std::uint32_t bits = 3u << maskBit(frame, 0);
+  FramePoses poses = framePoses();
   for (int it = 0; it < config_.pose_only_iterations; ++it) {
+    poses[static_cast<std::size_t>(frame)].set(frames_[static_cast<std::size_t>(frame)].T_w_c);
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int count = 0;
@@ -382,7 +403,7 @@ void VoEstimator::optimizePose(int frame) {
         if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
         Eigen::Vector2d r;
         ReprojectionJacobians J;
-        if (!residual(lm, frame, c, r, &J)) continue;
+        if (!residual(poses, lm, frame, c, r, &J)) continue;
         // Huber weights here too (Basalt's pose step ignores them, so one bad track can drag it).
         const double e = r.norm();
         const double w = inv_var_ * (e <= huber_px_ ? 1.0 : huber_px_ / e);
@@ -454,6 +475,7 @@ double VoEstimator::cost() const {
   // that a step moving points behind a camera is rejected.
   const double invalid_e = 10.0 * config_.outlier_threshold_px;
   const auto huber = [&](double e) { return e <= huber_px_ ? 0.5 * e * e : huber_px_ * (e - 0.5 * huber_px_); };
+  const FramePoses poses = framePoses();
   double total = 0.0;
   for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
     const int i = alive_[static_cast<std::size_t>(k)];
@@ -462,17 +484,18 @@ double VoEstimator::cost() const {
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
-      const double e = residual(lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
+      const double e = residual(poses, lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
       total += inv_var_ * huber(e);
     }
   }
   return total + priorCost();
 }
 
-void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks) {
+void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks, bool full_hessian) {
   H.setZero();
   b.setZero();
   const std::vector<int>& list = only_landmarks != nullptr ? *only_landmarks : alive_;
+  const FramePoses poses = framePoses();
   for (const int i : list) {
     const Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
     LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
@@ -487,7 +510,7 @@ void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landm
       const int t = bit / 2;
       Eigen::Vector2d r;
       ReprojectionJacobians J;
-      if (!residual(lm, t, bit % 2, r, &J)) continue;
+      if (!residual(poses, lm, t, bit % 2, r, &J)) continue;
       const double e = r.norm();
       const double w = inv_var_ * (e <= huber_px_ ? 1.0 : huber_px_ / e);
       L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
@@ -504,8 +527,9 @@ void VoEstimator::linearize(MatH& H, VecH& b, const std::vector<int>* only_landm
       const Eigen::Matrix<double, 6, 2> JtW = w * J.d_target.transpose();
       H.block<6, 6>(6 * h, 6 * h).noalias() += JhW * J.d_host;
       H.block<6, 6>(6 * t, 6 * t).noalias() += JtW * J.d_target;
-      H.block<6, 6>(6 * h, 6 * t).noalias() += JhW * J.d_target;
-      H.block<6, 6>(6 * t, 6 * h).noalias() += JtW * J.d_host;
+      // The LM solve reads only the lower triangle (LDLT<Lower>): the block above is skipped there.
+      if (full_hessian || h > t) H.block<6, 6>(6 * h, 6 * t).noalias() += JhW * J.d_target;
+      if (full_hessian || t > h) H.block<6, 6>(6 * t, 6 * h).noalias() += JtW * J.d_host;
       b.segment<6>(6 * h).noalias() += JhW * r;
       b.segment<6>(6 * t).noalias() += JtW * r;
       L.H_pl[static_cast<std::size_t>(h)].noalias() += JhW * J.d_landmark;
@@ -571,11 +595,13 @@ int VoEstimator::optimize(int max_iterations, bool filter) {
       filtered = true;
       current = cost();
     }
-    linearize(H_, b_, nullptr);
+    linearize(H_, b_, nullptr, false);
     bool accepted = false;
     bool converged = false;
     for (int attempt = 0; attempt < 8; ++attempt) {
-      // Reduced camera system: damp, eliminate every landmark (Schur complement per landmark).
+      // Reduced camera system: damp, eliminate every landmark (Schur complement per landmark). Only
+      // the lower triangle is formed: the LDLT reads nothing else, so the upper half would be
+      // work thrown away.
       H_reduced_ = H_;
       b_reduced_ = b_;
       for (int k = 0; k < kDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
@@ -595,7 +621,9 @@ int VoEstimator::optimize(int max_iterations, bool filter) {
           const int f = std::countr_zero(m);
           T[static_cast<std::size_t>(f)].noalias() = L.H_pl[static_cast<std::size_t>(f)] * L.H_ll_inv;
           b_reduced_.segment<6>(6 * f).noalias() -= T[static_cast<std::size_t>(f)] * L.b_l;
-          for (std::uint32_t n = L.frames; n != 0; n &= n - 1) {
+          // Slots g <= f: the bits of L.frames up to and including f.
+          const std::uint32_t lower = L.frames & ((2u << f) - 1u);
+          for (std::uint32_t n = lower; n != 0; n &= n - 1) {
             const int g = std::countr_zero(n);
             H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -=
                 T[static_cast<std::size_t>(f)] * L.H_pl[static_cast<std::size_t>(g)].transpose();
@@ -642,6 +670,7 @@ int VoEstimator::optimize(int max_iterations, bool filter) {
 }
 
 void VoEstimator::filterOutliers() {
+  const FramePoses poses = framePoses();
   for (int k = static_cast<int>(alive_.size()) - 1; k >= 0; --k) {
     const int i = alive_[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[static_cast<std::size_t>(i)];
@@ -654,7 +683,9 @@ void VoEstimator::filterOutliers() {
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
-      if (!residual(lm, bit / 2, bit % 2, r, nullptr) || r.norm() > config_.outlier_threshold_px) outliers |= 1u << bit;
+      if (!residual(poses, lm, bit / 2, bit % 2, r, nullptr) || r.norm() > config_.outlier_threshold_px) {
+        outliers |= 1u << bit;
+      }
     }
     if (outliers == 0) continue;
     const bool host_outlier = (outliers & (1u << maskBit(lm.host, 0))) != 0;
@@ -775,7 +806,7 @@ void VoEstimator::prepareMarginalization(int frame) {
 void VoEstimator::marginalize(int frame) {
   prepareMarginalization(frame);
   // Information on the window from the prior and the marginalised landmarks, landmarks eliminated.
-  linearize(H_, b_, &scratch_landmarks_);
+  linearize(H_, b_, &scratch_landmarks_, true);
   for (const int i : scratch_landmarks_) {
     LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
     if (!L.valid) continue;

@@ -136,9 +136,16 @@ class VoEstimator {
     bool valid = false;
   };
 
+  // Every window slot's pose as matrices, taken at the start of a pass over the residuals.
+  using FramePoses = std::array<PoseMatrices, kMaxWindowFrames>;
+
   static int maskBit(int frame, int cam) { return 2 * frame + cam; }
   int numObs(const Landmark& lm) const;
+  FramePoses framePoses() const;
   bool residual(const Landmark& lm, int frame, int cam, Eigen::Vector2d& r, ReprojectionJacobians* jac) const;
+  // The same with the poses of framePoses() (still current).
+  bool residual(const FramePoses& poses, const Landmark& lm, int frame, int cam, Eigen::Vector2d& r,
+                ReprojectionJacobians* jac) const;
 
   // Steps of process().
   bool initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c);
@@ -163,7 +170,9 @@ class VoEstimator {
   double cost() const;
   double priorCost() const;
   Eigen::Matrix<double, 6, 1> priorDelta(int frame) const;
-  void linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks);
+  // Normal equations of the residuals (all landmarks, or only_landmarks) plus the prior. Without
+  // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads).
+  void linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks, bool full_hessian);
   void backup();
   void restore();
   void applyIncrement(const VecH& dx);
@@ -171,6 +180,7 @@ class VoEstimator {
   BackendConfig config_;
   std::array<GenericCamera<double>, 2> cameras_;
   std::array<SE3d, 2> T_cam0_cam_;
+  std::array<PoseMatrices, 2> cam0_cam_;  // T_cam0_cam_ as matrices
   SE3d T_body_cam0_;
   double huber_px_ = 1.0;
   double inv_var_ = 4.0;

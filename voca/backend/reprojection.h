@@ -42,23 +42,41 @@ struct ReprojectionJacobians {
   Eigen::Matrix<double, 2, 3> d_landmark;
 };
 
+// A pose's rotation as a matrix, both ways, with its translation: computed once per pose and pass
+// over the window's residuals, because converting the quaternions of host, target and extrinsic
+// for every residual was a large share of the backend's time. Holds exactly what the conversion
+// per residual gave, so results do not change.
+struct PoseMatrices {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();      // T's rotation (frame -> parent)
+  Eigen::Matrix3d R_inv = Eigen::Matrix3d::Identity();  // its transpose
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+
+  PoseMatrices() = default;
+  explicit PoseMatrices(const SE3d& T) { set(T); }
+  void set(const SE3d& T) {
+    R = T.rotationMatrix();
+    R_inv = R.transpose();
+    t = T.translation();
+  }
+};
+
 // Projects the landmark (bearing s and inverse distance rho in the host frame's cam0) into camera
-// `camera` of the target frame, whose pose in that frame's cam0 is T_cam0_cam. Poses are
+// `camera` of the target frame, whose pose in that frame's cam0 is cam0_cam. host and target hold
 // T_world_cam0 of the host and target frames. Works in homogeneous coordinates scaled by rho, so a
 // point at infinity (rho = 0) is fine. Returns false when the camera model cannot project it.
-inline bool reprojectLandmark(const GenericCamera<double>& camera, const SE3d& T_world_host, const SE3d& T_world_target,
-                              const SE3d& T_cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const PoseMatrices& target,
+                              const PoseMatrices& cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
                               ReprojectionJacobians* jacobians = nullptr) {
   Eigen::Matrix<double, 3, 2> d_b_d_s;
   const Eigen::Vector3d b = stereographicUnproject(s, jacobians != nullptr ? &d_b_d_s : nullptr);
-  const Eigen::Matrix3d R_w_h = T_world_host.rotationMatrix();
-  const Eigen::Matrix3d R_t_w = T_world_target.rotationMatrix().transpose();
-  const Eigen::Matrix3d R_cam_cam0 = T_cam0_cam.rotationMatrix().transpose();
-  const Eigen::Vector3d dt_w = T_world_host.translation() - T_world_target.translation();
+  const Eigen::Matrix3d& R_w_h = host.R;
+  const Eigen::Matrix3d& R_t_w = target.R_inv;
+  const Eigen::Matrix3d& R_cam_cam0 = cam0_cam.R_inv;
+  const Eigen::Vector3d dt_w = host.t - target.t;
   const Eigen::Vector3d Rb_w = R_w_h * b;
   // v: the point relative to the target origin, in world axes, scaled by rho.
   const Eigen::Vector3d v_w = Rb_w + dt_w * rho;
-  const Eigen::Vector3d p_cam = R_cam_cam0 * (R_t_w * v_w - T_cam0_cam.translation() * rho);
+  const Eigen::Vector3d p_cam = R_cam_cam0 * (R_t_w * v_w - cam0_cam.t * rho);
   Eigen::Matrix<double, 2, 3> d_uv_d_p;
   if (!camera.project(p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
   if (jacobians != nullptr) {
@@ -70,9 +88,17 @@ inline bool reprojectLandmark(const GenericCamera<double>& camera, const SE3d& T
     // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
     jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
     jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * d_b_d_s;
-    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * T_cam0_cam.translation();
+    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * cam0_cam.t;
   }
   return true;
+}
+
+// The same from the poses themselves: T_world_host, T_world_target and T_cam0_cam.
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const SE3d& T_world_host, const SE3d& T_world_target,
+                              const SE3d& T_cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
+                              ReprojectionJacobians* jacobians = nullptr) {
+  return reprojectLandmark(camera, PoseMatrices(T_world_host), PoseMatrices(T_world_target), PoseMatrices(T_cam0_cam),
+                           s, rho, uv, jacobians);
 }
 
 }  // namespace voca
