@@ -94,10 +94,8 @@ struct AlignParams {
   // A step whose translation exceeds this (level pixels) means the linearisation is meaningless.
   float max_step_px = 20.f;
   // Iterations stop early once the step's translation is below this (level pixels) on level 0, and
-  // below coarse_min_step_px on coarser levels, whose result the finer levels refine anyway. 0.01 px is
-  // far below the tracks' noise; at 0.002 px half of the level-0 alignments ran every iteration to
-  // polish noise (perf on a moving 752x480 sequence: level 0 took a third of all iterations).
-  float min_step_px = 1e-2f;
+  // below coarse_min_step_px on coarser levels, whose result the finer levels refine anyway.
+  float min_step_px = 2e-3f;
   float coarse_min_step_px = 0.05f;
 };
 
