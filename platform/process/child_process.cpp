@@ -17,6 +17,21 @@ extern char** environ;
 
 namespace voca::platform {
 
+namespace {
+
+ChildExit decodeStatus(pid_t pid, int status) {
+  ChildExit exit;
+  exit.pid = pid;
+  if (WIFEXITED(status)) {
+    exit.exit_code = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    exit.signal = WTERMSIG(status);
+  }
+  return exit;
+}
+
+}  // namespace
+
 pid_t startChild(const std::vector<std::string>& argv, const std::filesystem::path& log_file) {
   if (argv.empty()) throw RuntimeFailure("startChild: empty command");
   std::vector<char*> args;
@@ -46,14 +61,18 @@ ChildExit waitForAnyChild() {
     pid = ::waitpid(-1, &status, 0);
   } while (pid < 0 && errno == EINTR);
   if (pid < 0) throw RuntimeFailure(fmt::format("waiting for a child process: {}", std::strerror(errno)));
-  ChildExit exit;
-  exit.pid = pid;
-  if (WIFEXITED(status)) {
-    exit.exit_code = WEXITSTATUS(status);
-  } else if (WIFSIGNALED(status)) {
-    exit.signal = WTERMSIG(status);
-  }
-  return exit;
+  return decodeStatus(pid, status);
+}
+
+std::optional<ChildExit> pollChild(pid_t pid) {
+  int status = 0;
+  pid_t ended = -1;
+  do {
+    ended = ::waitpid(pid, &status, WNOHANG);
+  } while (ended < 0 && errno == EINTR);
+  if (ended < 0) throw RuntimeFailure(fmt::format("waiting for child process {}: {}", pid, std::strerror(errno)));
+  if (ended == 0) return std::nullopt;
+  return decodeStatus(ended, status);
 }
 
 std::filesystem::path currentExecutable(const std::string& argv0) {

@@ -6,6 +6,7 @@
 #include <sys/types.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,10 @@ pid_t startChild(const std::vector<std::string>& argv, const std::filesystem::pa
 // Blocks until one of this process's children ends and reports it. Throws RuntimeFailure when
 // there is no child to wait for.
 ChildExit waitForAnyChild();
+
+// The exit of child pid if it has ended, without blocking (nullopt while it runs), for callers that
+// report progress while they wait. Throws RuntimeFailure when pid is not a child of this process.
+std::optional<ChildExit> pollChild(pid_t pid);
 
 // The running program's own executable (to start more of itself), from /proc/self/exe; falls back
 // to the given argv0 when /proc is not mounted.
