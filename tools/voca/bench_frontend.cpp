@@ -74,6 +74,7 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
     if (!cached) return platform::interruptedExitCode(platform::stopSignal());
     input = *cached;
     if (config.empty()) config = harness::benchSequenceConfig(spec);
+    fmt::print("sequence: {}\n", harness::describeBenchSequence(spec));
   }
   // Raw datasets are encoded once, so every mode and repeat tracks the same decoded frames.
   std::optional<TempDir> encoded;
