@@ -118,6 +118,20 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   CHECK(bench.text.find("fps") != std::string::npos);
   CHECK(bench.text.find("MV-only parse vectors identical to full decode: yes") != std::string::npos);
 
+  // voca bench backend: the estimator timed alone on the frontend's real tracks of this video.
+  const auto backend = runVocaOutput("bench backend " + video.string() + " --calib " +
+                                     (scratch / "odd_calib.json").string() + " --warmup 10");
+  requireSuccess(backend, "voca bench backend");
+  INFO("voca bench backend printed:\n" << backend.text);
+  CHECK(backend.text.find("backend on the frontend's tracks (mv_parallel_of mode") != std::string::npos);
+  CHECK(backend.text.find("measured frames 20 (after 10 warm-up)") != std::string::npos);
+  CHECK(backend.text.find("target per stereo frame on one core: median <= 4 ms") != std::string::npos);
+  // Fewer frames than the warm-up: a clear error, not a table of NaNs.
+  const auto too_short = runVocaOutput("bench backend " + video.string() + " --calib " +
+                                       (scratch / "odd_calib.json").string() + " --warmup 30");
+  CHECK(too_short.exit_code != 0);
+  CHECK(too_short.text.find("30 frames: the estimator needs more than the 30 warm-up frames") != std::string::npos);
+
   // voca demo --reuse on this sequence: both VO variants side by side, trajectories and overlay.
   const auto demo_run = runVocaOutput("demo --out " + demo.string() + " --reuse");
   requireSuccess(demo_run, "voca demo");
