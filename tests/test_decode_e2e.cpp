@@ -44,7 +44,7 @@ TEST_CASE("micro EuRoC at 500 kbit/s decodes back with vectors on every P-frame"
   const voca::Dataset video = voca::openDataset(dir.path());
   REQUIRE(video.layout == voca::DatasetLayout::kVocaVideo);
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   voca::decode::StereoVideoReader reader(video, options);
   CHECK(reader.size() == 95);
 

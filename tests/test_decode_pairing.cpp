@@ -145,7 +145,7 @@ class StandInDecoder final : public PixelDecoder {
 
 DecoderOptions softwareOptions() {
   DecoderOptions options;
-  options.backend = DecoderBackend::kSoftware;
+  options.kind = DecoderKind::kSoftware;
   options.log_choice = false;
   return options;
 }

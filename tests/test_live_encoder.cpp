@@ -132,7 +132,7 @@ TEST_CASE("low-latency x264: one packet per frame at once, no B-frames, vectors 
   stream.time_base_num = 1;
   stream.time_base_den = 20;
   decode::DecoderOptions options;
-  options.backend = decode::DecoderBackend::kSoftware;
+  options.kind = decode::DecoderKind::kSoftware;
   options.log_choice = false;
   decode::VideoDecoder decoder(stream, options);
   decode::DecodedFrame frame;

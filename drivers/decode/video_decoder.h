@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/demuxer.h"
 #include "drivers/decode/pixel_decoder.h"
 #include "voca/core/image.h"
@@ -30,18 +30,18 @@ struct DecodedFrame {
 };
 
 struct DecoderOptions {
-  DecoderBackend backend = DecoderBackend::kAuto;
+  DecoderKind kind = DecoderKind::kAuto;
   bool export_motion = true;
   // false: parse only for the motion vectors (software, loop filter skipped, luma left empty).
   bool decode_pixels = true;
   std::string vaapi_device = "/dev/dri/renderD128";
   // Corrupt bitstream data is an error naming the frame instead of being concealed.
   bool strict = true;
-  bool log_choice = true;  // print the chosen backend to stderr (once per process and description)
+  bool log_choice = true;  // print the chosen decoder to stderr (once per process and description)
 };
 
 // Decodes one video stream on the calling thread. Software decoding uses one thread and no frame
-// threading (frame threading adds a frame of latency and reorders side data); hardware backends
+// threading (frame threading adds a frame of latency and reorders side data); hardware decoders
 // decode the pixels while a software context parses the same packets for the motion vectors; each
 // picture is paired with its vectors by pts, so a device that returns pictures out of order or drops
 // one still gets the right vectors on every picture it returns.
@@ -66,8 +66,8 @@ class VideoDecoder {
   // The next decoded frame, or false when none is ready (or the stream has ended).
   bool receive(DecodedFrame& frame);
 
-  DecoderBackend backend() const;
-  // Hardware backends: pictures the pixel decoder never returned (their vectors were parsed, then
+  DecoderKind kind() const;
+  // Hardware decoders: pictures the pixel decoder never returned (their vectors were parsed, then
   // given up once later pictures had come out); the frame is missing from the output, not wrong.
   std::int64_t pixelFramesDropped() const;
   const std::string& description() const;  // "decoder: software", "decoder: vaapi (+ software MV parse)"

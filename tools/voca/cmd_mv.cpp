@@ -114,7 +114,7 @@ int runMv(const MvOptions& opts) {
   }
   const FrameRange range = parseFrameRange(opts.frames);
   DecoderOptions decoder_options;
-  decoder_options.backend = parseBackend(opts.decoder);
+  decoder_options.kind = parseDecoderKind(opts.decoder);
 
   std::unique_ptr<VideoReader> reader;
   if (fs::is_directory(opts.input)) {
@@ -184,7 +184,7 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--frames", opts->frames, "Frame range a:b (a inclusive, b exclusive; either may be omitted)");
       app.add_option("--format", opts->format, "png (one mv_<frame>.png per frame) or mp4 (mv.mp4)")
           ->capture_default_str();
-      app.add_option("--decoder", opts->decoder, "Decoder backend: auto, software, vaapi, v4l2m2m")
+      app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi, v4l2m2m")
           ->capture_default_str();
       app.add_option("--arrow-scale", opts->arrow_scale, "Multiply arrow lengths by this for visibility")
           ->capture_default_str();
