@@ -14,8 +14,8 @@
 #include <fmt/core.h>
 
 #include "drivers/dataset/dataset.h"
-#include "drivers/decode/rgb_video_writer.h"
 #include "drivers/decode/video_reader.h"
+#include "drivers/encode/rgb_video_writer.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 #include "voca/image/draw.h"
@@ -106,6 +106,7 @@ void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage
 
 int runMv(const MvOptions& opts) {
   using namespace voca::decode;
+  using voca::encode::RgbVideoWriter;
   if (opts.format != "png" && opts.format != "mp4") {
     throw voca::InputError("--format '" + opts.format + "': expected png or mp4");
   }
@@ -184,8 +185,7 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--frames", opts->frames, "Frame range a:b (a inclusive, b exclusive; either may be omitted)");
       app.add_option("--format", opts->format, "png (one mv_<frame>.png per frame) or mp4 (mv.mp4)")
           ->capture_default_str();
-      app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi, v4l2m2m")
-          ->capture_default_str();
+      app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi, v4l2m2m")->capture_default_str();
       app.add_option("--arrow-scale", opts->arrow_scale, "Multiply arrow lengths by this for visibility")
           ->capture_default_str();
       app.add_option("--outlier-radius", opts->outliers.radius_px,
