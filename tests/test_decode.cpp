@@ -153,7 +153,7 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
   const std::vector<DecodedFrame> frames = decodeAll(dir / "t.mp4", t_ns);
   REQUIRE(frames.size() == std::size_t(kFrames));
 
-  CHECK(frames[0].type == voca::PictureType::kI);
+  CHECK(frames[0].motion.pictureType() == voca::PictureType::kI);
   CHECK_FALSE(frames[0].motion.hasVectors());
   CHECK(frames[0].motion.blockAt(kWidth / 2, kHeight / 2) == nullptr);
   for (int k = 0; k < kFrames; ++k) {
@@ -161,7 +161,7 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
     CHECK(frames[k].frame_index == k);
     CHECK(frames[k].luma.width() == kWidth);
     if (k > 0) {
-      CHECK(frames[k].type == voca::PictureType::kP);
+      CHECK(frames[k].motion.pictureType() == voca::PictureType::kP);
       CHECK(frames[k].motion.hasVectors());
     }
   }
@@ -212,14 +212,14 @@ TEST_CASE("MPEG-4 Part 2 and MPEG-2 streams give motion vectors through the same
     encode(dir / (codec + ".mp4"), images, codec, /*two_pass=*/false);  // one pass keeps the unit test fast
     const std::vector<DecodedFrame> frames = decodeAll(dir / (codec + ".mp4"));
     REQUIRE(frames.size() == std::size_t(kFrames));
-    CHECK(frames[0].type == voca::PictureType::kI);
+    CHECK(frames[0].motion.pictureType() == voca::PictureType::kI);
     CHECK_FALSE(frames[0].motion.hasVectors());
     // libavcodec's MPEG-2 decoder holds one frame back unless the stream is flagged low-delay and
     // returns the held frame at end of stream without side data, so its last frame has no vectors.
     const int last_with_vectors = codec == "mpeg2video" ? kFrames - 2 : kFrames - 1;
     for (int k = 1; k <= last_with_vectors; ++k) {
       CAPTURE(k);
-      CHECK(frames[k].type == voca::PictureType::kP);
+      CHECK(frames[k].motion.pictureType() == voca::PictureType::kP);
       CHECK(frames[k].motion.hasVectors());
     }
     // These codecs use half-pel vectors (1.5, 1.0 is representable), so the tolerance is one half-pel step.
@@ -299,8 +299,7 @@ TEST_CASE("backend selection follows the device probe and falls back to software
   }
   SUBCASE("an explicitly requested backend that is missing is an error, not a silent fallback") {
     const FakeMachine m{};
-    CHECK_THROWS_AS(selectDecoderKind(DecoderKind::kVaapi, VideoCodec::kH264, node, true, m.probe()),
-                    voca::InputError);
+    CHECK_THROWS_AS(selectDecoderKind(DecoderKind::kVaapi, VideoCodec::kH264, node, true, m.probe()), voca::InputError);
     CHECK_THROWS_AS(selectDecoderKind(DecoderKind::kV4l2m2m, VideoCodec::kH264, node, true, m.probe()),
                     voca::InputError);
     CHECK_THROWS_AS(voca::decode::parseDecoderKind("cuda"), voca::InputError);

@@ -458,7 +458,7 @@ void VideoDecoder::sendEnd() {
 void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
   const int width = pixels.width, height = pixels.height;
   // Hardware wrappers (V4L2 M2M) may not report the picture type; the software parse always does.
-  out.type = pictureType(&vectors != &pixels ? vectors.pict_type : pixels.pict_type);
+  const PictureType type = pictureType(&vectors != &pixels ? vectors.pict_type : pixels.pict_type);
   out.frame_index = frames_out;
   const std::int64_t pts = pixels.best_effort_timestamp != AV_NOPTS_VALUE ? pixels.best_effort_timestamp : pixels.pts;
   out.pts = pts == AV_NOPTS_VALUE ? kNoPts : pts;
@@ -493,8 +493,7 @@ void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, 
   if (out.motion.maxWidth() < width || out.motion.maxHeight() < height) {
     out.motion = MotionField(std::max(width, stream.width), std::max(height, stream.height));
   }
-  out.motion.reset(width, height, out.type);
-  out.motion.setSourceFrame(frames_out);
+  out.motion.reset(width, height, type);
   if (options.export_motion || !options.decode_pixels) {
     const AVFrameSideData* side = av_frame_get_side_data(&vectors, AV_FRAME_DATA_MOTION_VECTORS);
     if (side != nullptr) {

@@ -1,5 +1,5 @@
 #pragma once
-// Compressed packets -> DecodedFrame (luma plane, picture type, timestamp, motion field).
+// Compressed packets -> DecodedFrame (luma plane, timestamp, motion field with the picture type).
 
 #include <cstdint>
 #include <memory>
@@ -15,12 +15,11 @@ namespace voca::decode {
 
 // One decoded picture. Buffers are sized for the stream on first use and reused afterwards.
 struct DecodedFrame {
-  GrayImage luma;  // the Y plane as coded (no colour conversion); empty for an MV-only parse
-  PictureType type = PictureType::kUnknown;
+  GrayImage luma;         // the Y plane as coded (no colour conversion); empty for an MV-only parse
   std::int64_t t_ns = 0;  // dataset timestamp when known (VideoReader), else pts in ns
   std::int64_t pts = kNoPts;
   std::int64_t frame_index = 0;  // output order, from 0
-  MotionField motion;            // empty (no vectors) when motion export is off
+  MotionField motion;            // picture type always; empty (no vectors) when motion export is off
   // Non-strict decoding only: the decoder flagged the picture as damaged (missing or corrupt
   // bitstream data, concealed). Strict decoding throws instead.
   bool damaged = false;

@@ -160,8 +160,8 @@ int runMv(const MvOptions& opts) {
     }
     ++written;
     fmt::print(stderr, "\rframe {}{} ({}): {} vectors, {} flagged    ", frame.frame_index,
-               expected > 0 ? fmt::format("/{}", expected) : std::string(), voca::pictureTypeName(frame.type),
-               frame.motion.blocks().size(), outliers);
+               expected > 0 ? fmt::format("/{}", expected) : std::string(),
+               voca::pictureTypeName(frame.motion.pictureType()), frame.motion.blocks().size(), outliers);
   }
   if (video) video->finish();
   fmt::print(stderr, "\n");
