@@ -14,7 +14,7 @@
 
 #include <Eigen/Geometry>
 
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
 #include "test_support.h"
@@ -84,7 +84,7 @@ void encode(const std::filesystem::path& path, const std::vector<GrayImage>& fra
 
 std::vector<DecodedFrame> decodeAll(const std::filesystem::path& path, std::vector<std::int64_t> t_ns = {}) {
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   voca::decode::VideoReader reader(path, std::move(t_ns), options);
   std::vector<DecodedFrame> frames;
   DecodedFrame frame;
@@ -153,7 +153,7 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
   const std::vector<DecodedFrame> frames = decodeAll(dir / "t.mp4", t_ns);
   REQUIRE(frames.size() == std::size_t(kFrames));
 
-  CHECK(frames[0].type == voca::PictureType::kI);
+  CHECK(frames[0].motion.pictureType() == voca::PictureType::kI);
   CHECK_FALSE(frames[0].motion.hasVectors());
   CHECK(frames[0].motion.blockAt(kWidth / 2, kHeight / 2) == nullptr);
   for (int k = 0; k < kFrames; ++k) {
@@ -161,7 +161,7 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
     CHECK(frames[k].frame_index == k);
     CHECK(frames[k].luma.width() == kWidth);
     if (k > 0) {
-      CHECK(frames[k].type == voca::PictureType::kP);
+      CHECK(frames[k].motion.pictureType() == voca::PictureType::kP);
       CHECK(frames[k].motion.hasVectors());
     }
   }
@@ -212,14 +212,14 @@ TEST_CASE("MPEG-4 Part 2 and MPEG-2 streams give motion vectors through the same
     encode(dir / (codec + ".mp4"), images, codec, /*two_pass=*/false);  // one pass keeps the unit test fast
     const std::vector<DecodedFrame> frames = decodeAll(dir / (codec + ".mp4"));
     REQUIRE(frames.size() == std::size_t(kFrames));
-    CHECK(frames[0].type == voca::PictureType::kI);
+    CHECK(frames[0].motion.pictureType() == voca::PictureType::kI);
     CHECK_FALSE(frames[0].motion.hasVectors());
     // libavcodec's MPEG-2 decoder holds one frame back unless the stream is flagged low-delay and
     // returns the held frame at end of stream without side data, so its last frame has no vectors.
     const int last_with_vectors = codec == "mpeg2video" ? kFrames - 2 : kFrames - 1;
     for (int k = 1; k <= last_with_vectors; ++k) {
       CAPTURE(k);
-      CHECK(frames[k].type == voca::PictureType::kP);
+      CHECK(frames[k].motion.pictureType() == voca::PictureType::kP);
       CHECK(frames[k].motion.hasVectors());
     }
     // These codecs use half-pel vectors (1.5, 1.0 is representable), so the tolerance is one half-pel step.
@@ -255,55 +255,54 @@ struct FakeMachine {
 }  // namespace
 
 TEST_CASE("backend selection follows the device probe and falls back to software") {
-  using voca::decode::DecoderBackend;
-  using voca::decode::selectDecoderBackend;
+  using voca::decode::DecoderKind;
+  using voca::decode::selectDecoderKind;
   using voca::decode::VideoCodec;
   const std::string node = "/dev/dri/renderD128";
 
   SUBCASE("vaapi available") {
     const FakeMachine m{true, true, true};
-    const auto choice = selectDecoderBackend(DecoderBackend::kAuto, VideoCodec::kH264, node, true, m.probe());
-    CHECK(choice.backend == DecoderBackend::kVaapi);
+    const auto choice = selectDecoderKind(DecoderKind::kAuto, VideoCodec::kH264, node, true, m.probe());
+    CHECK(choice.kind == DecoderKind::kVaapi);
     CHECK(choice.description == "decoder: vaapi (+ software MV parse)");
   }
   SUBCASE("vaapi node present but opening fails -> next backend, then software") {
     const FakeMachine m{true, false, false};
-    const auto choice = selectDecoderBackend(DecoderBackend::kAuto, VideoCodec::kH264, node, true, m.probe());
-    CHECK(choice.backend == DecoderBackend::kSoftware);
+    const auto choice = selectDecoderKind(DecoderKind::kAuto, VideoCodec::kH264, node, true, m.probe());
+    CHECK(choice.kind == DecoderKind::kSoftware);
     CHECK(choice.description == "decoder: software");
     REQUIRE(choice.notes.size() == 2);
     CHECK(choice.notes[0].find("cannot open") != std::string::npos);
   }
   SUBCASE("vaapi fails, v4l2 m2m present") {
     const FakeMachine m{true, false, true};
-    const auto choice = selectDecoderBackend(DecoderBackend::kAuto, VideoCodec::kMpeg2, node, true, m.probe());
-    CHECK(choice.backend == DecoderBackend::kV4l2m2m);
+    const auto choice = selectDecoderKind(DecoderKind::kAuto, VideoCodec::kMpeg2, node, true, m.probe());
+    CHECK(choice.kind == DecoderKind::kV4l2m2m);
     CHECK(choice.description == "decoder: v4l2m2m (+ software MV parse)");
   }
   SUBCASE("nothing") {
     const FakeMachine m{};
-    const auto choice = selectDecoderBackend(DecoderBackend::kAuto, VideoCodec::kH264, node, true, m.probe());
-    CHECK(choice.backend == DecoderBackend::kSoftware);
+    const auto choice = selectDecoderKind(DecoderKind::kAuto, VideoCodec::kH264, node, true, m.probe());
+    CHECK(choice.kind == DecoderKind::kSoftware);
     CHECK(choice.description == "decoder: software");
   }
   SUBCASE("pixels only: no MV parse mentioned") {
     const FakeMachine m{true, true, false};
-    CHECK(selectDecoderBackend(DecoderBackend::kAuto, VideoCodec::kH264, node, false, m.probe()).description ==
+    CHECK(selectDecoderKind(DecoderKind::kAuto, VideoCodec::kH264, node, false, m.probe()).description ==
           "decoder: vaapi");
   }
   SUBCASE("software requested: no probing") {
     const FakeMachine m{true, true, true};
-    CHECK(selectDecoderBackend(DecoderBackend::kSoftware, VideoCodec::kH264, node, true, m.probe()).backend ==
-          DecoderBackend::kSoftware);
+    CHECK(selectDecoderKind(DecoderKind::kSoftware, VideoCodec::kH264, node, true, m.probe()).kind ==
+          DecoderKind::kSoftware);
     CHECK(m.calls == 0);
   }
   SUBCASE("an explicitly requested backend that is missing is an error, not a silent fallback") {
     const FakeMachine m{};
-    CHECK_THROWS_AS(selectDecoderBackend(DecoderBackend::kVaapi, VideoCodec::kH264, node, true, m.probe()),
+    CHECK_THROWS_AS(selectDecoderKind(DecoderKind::kVaapi, VideoCodec::kH264, node, true, m.probe()), voca::InputError);
+    CHECK_THROWS_AS(selectDecoderKind(DecoderKind::kV4l2m2m, VideoCodec::kH264, node, true, m.probe()),
                     voca::InputError);
-    CHECK_THROWS_AS(selectDecoderBackend(DecoderBackend::kV4l2m2m, VideoCodec::kH264, node, true, m.probe()),
-                    voca::InputError);
-    CHECK_THROWS_AS(voca::decode::parseBackend("cuda"), voca::InputError);
+    CHECK_THROWS_AS(voca::decode::parseDecoderKind("cuda"), voca::InputError);
   }
 }
 
@@ -321,7 +320,7 @@ TEST_CASE("a probe that promises hardware which then fails to open falls back to
   options.vaapi_device = (dir / "renderD999").string();
   voca::decode::Demuxer demuxer(dir / "f.mp4");
   voca::decode::VideoDecoder decoder(demuxer.stream(), options, &probe, "f.mp4");
-  CHECK(decoder.backend() == voca::decode::DecoderBackend::kSoftware);
+  CHECK(decoder.kind() == voca::decode::DecoderKind::kSoftware);
   CHECK(decoder.description() == "decoder: software");
   voca::decode::Packet packet;
   DecodedFrame frame;

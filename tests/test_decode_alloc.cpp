@@ -52,7 +52,7 @@ TEST_CASE("decoder: no heap allocation per frame after warm-up, with motion expo
   REQUIRE(packets.size() == static_cast<std::size_t>(kFrames));
 
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   options.log_choice = false;
   voca::decode::VideoDecoder decoder(demuxer.stream(), options, nullptr, "a.mp4");
   voca::decode::DecodedFrame frame;

@@ -62,7 +62,7 @@ std::vector<std::int64_t> timestamps(int n) {
 // Decodes a whole file; returns the number of frames.
 int readAll(const fs::path& path, std::vector<std::int64_t> t_ns = {}) {
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   VideoReader reader(path, std::move(t_ns), options);
   DecodedFrame frame;
   int n = 0;
@@ -221,7 +221,7 @@ TEST_CASE("corrupt packets are reported with their index") {
   packets[5].bytes.clear();  // an empty sample must not be taken for end of stream
 
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   voca::decode::VideoDecoder decoder(demuxer.stream(), options, nullptr, "good.mp4");
   DecodedFrame frame;
   int decoded = 0;

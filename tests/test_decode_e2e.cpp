@@ -44,7 +44,7 @@ TEST_CASE("micro EuRoC at 500 kbit/s decodes back with vectors on every P-frame"
   const voca::Dataset video = voca::openDataset(dir.path());
   REQUIRE(video.layout == voca::DatasetLayout::kVocaVideo);
   voca::decode::DecoderOptions options;
-  options.backend = voca::decode::DecoderBackend::kSoftware;
+  options.kind = voca::decode::DecoderKind::kSoftware;
   voca::decode::StereoVideoReader reader(video, options);
   CHECK(reader.size() == 95);
 
@@ -68,15 +68,15 @@ TEST_CASE("micro EuRoC at 500 kbit/s decodes back with vectors on every P-frame"
     CHECK(left.luma.width() == 752);
     CHECK(left.luma.height() == 480);
     if (n == 0) {
-      CHECK(left.type == voca::PictureType::kI);
+      CHECK(left.motion.pictureType() == voca::PictureType::kI);
       CHECK_FALSE(left.motion.hasVectors());
     } else {
       // keyint=1000 and 95 frames: every later frame is a P-frame and must carry vectors.
-      CHECK(left.type == voca::PictureType::kP);
-      CHECK(right.type == voca::PictureType::kP);
+      CHECK(left.motion.pictureType() == voca::PictureType::kP);
+      CHECK(right.motion.pictureType() == voca::PictureType::kP);
       CHECK(left.motion.hasVectors());
       CHECK(right.motion.hasVectors());
-      p_frames += left.type == voca::PictureType::kP ? 1 : 0;
+      p_frames += left.motion.pictureType() == voca::PictureType::kP ? 1 : 0;
     }
     REQUIRE(parse.next(parsed));
     const auto a = left.motion.blocks(), b = parsed.motion.blocks();

@@ -145,13 +145,13 @@ class StandInDecoder final : public PixelDecoder {
 
 DecoderOptions softwareOptions() {
   DecoderOptions options;
-  options.backend = DecoderBackend::kSoftware;
+  options.kind = DecoderKind::kSoftware;
   options.log_choice = false;
   return options;
 }
 
 void checkSame(const DecodedFrame& got, const Reference& want) {
-  CHECK(got.type == want.type);
+  CHECK(got.motion.pictureType() == want.type);
   REQUIRE(got.luma.width() == want.luma.width());
   bool same_pixels = true;
   for (int y = 0; y < kHeight; ++y)
@@ -175,7 +175,8 @@ TEST_CASE("hardware pixels get the vectors of their own packet when the device r
   {
     VideoDecoder software(encoded.stream, softwareOptions());
     for (const DecodedFrame& f : decodeAll(software, encoded.packets)) {
-      reference[f.pts] = Reference{f.luma, {f.motion.blocks().begin(), f.motion.blocks().end()}, f.type};
+      reference[f.pts] =
+          Reference{f.luma, {f.motion.blocks().begin(), f.motion.blocks().end()}, f.motion.pictureType()};
     }
   }
   REQUIRE(reference.size() == static_cast<std::size_t>(kFrames));

@@ -127,7 +127,7 @@ struct Outcome {
 Outcome run(const StereoStream& stream, int first, int lossy_camera, std::vector<int> lost, int threads, bool strict) {
   PacketSource source(stream, first, lossy_camera, std::move(lost));
   DecodeStageOptions decode_options;
-  decode_options.decoder.backend = decode::DecoderBackend::kSoftware;
+  decode_options.decoder.kind = decode::DecoderKind::kSoftware;
   decode_options.decoder.strict = strict;
   decode_options.decoder.log_choice = false;
   DecodeStage decode({stream.info, stream.info}, decode_options);

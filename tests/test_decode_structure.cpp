@@ -116,7 +116,7 @@ std::string decodeClip(const fs::path& path, int* frames_out = nullptr) {
   return voca::test::inputErrorOf([&] {
     voca::decode::Demuxer demuxer(path);
     voca::decode::DecoderOptions options;
-    options.backend = voca::decode::DecoderBackend::kSoftware;
+    options.kind = voca::decode::DecoderKind::kSoftware;
     options.log_choice = false;
     voca::decode::VideoDecoder decoder(demuxer.stream(), options, nullptr, path.filename().string());
     voca::decode::Packet packet;

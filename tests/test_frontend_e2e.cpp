@@ -250,7 +250,7 @@ void encodeRoundTrip(const std::vector<const GrayImage*>& images, const std::fil
     REQUIRE(reader.next(decoded));
     (camera == 0 ? f.left : f.right) = decoded.luma;
     (camera == 0 ? f.motion_left : f.motion_right) = decoded.motion;
-    f.type = decoded.type;
+    f.type = decoded.motion.pictureType();
     f.has_motion = true;
   }
 }
@@ -468,7 +468,7 @@ TEST_CASE("e2e frontend: micro EuRoC at 500 kbit/s keeps >= 80 % of the raw run'
     f.right = r.luma;
     f.motion_left = l.motion;
     f.motion_right = r.motion;
-    f.type = l.type;
+    f.type = l.motion.pictureType();
     f.t_ns = l.t_ns;
     f.has_motion = true;
   }

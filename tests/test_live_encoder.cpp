@@ -132,7 +132,7 @@ TEST_CASE("low-latency x264: one packet per frame at once, no B-frames, vectors 
   stream.time_base_num = 1;
   stream.time_base_den = 20;
   decode::DecoderOptions options;
-  options.backend = decode::DecoderBackend::kSoftware;
+  options.kind = decode::DecoderKind::kSoftware;
   options.log_choice = false;
   decode::VideoDecoder decoder(stream, options);
   decode::DecodedFrame frame;
@@ -156,9 +156,9 @@ TEST_CASE("low-latency x264: one packet per frame at once, no B-frames, vectors 
     // And it decodes at once: no reordering delay in the decoder either.
     REQUIRE(decoder.receive(frame));
     CHECK(frame.pts == i);
-    CHECK(frame.type == (i % kGop == 0 ? PictureType::kI : PictureType::kP));
+    CHECK(frame.motion.pictureType() == (i % kGop == 0 ? PictureType::kI : PictureType::kP));
     ++decoded;
-    if (frame.type == PictureType::kP) {
+    if (frame.motion.pictureType() == PictureType::kP) {
       ++p_frames;
       for (const MotionBlock& b : frame.motion.blocks()) {
         sum_dx += b.dx;

@@ -257,7 +257,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
     VideoFolderSource source(dataset);
     SourceStageAdapter read(source, {});
     DecodeStageOptions decode_options;
-    decode_options.decoder.backend = decode::DecoderBackend::kSoftware;
+    decode_options.decoder.kind = decode::DecoderKind::kSoftware;
     decode_options.decoder.strict = false;
     decode_options.decoder.log_choice = false;
     DecodeStage decode(source.info().streams, decode_options);
@@ -311,7 +311,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
   pipeline::VoRunOptions options;
   options.input = folder;
   options.progress = false;
-  options.decoder = decode::DecoderBackend::kSoftware;
+  options.decoder = decode::DecoderKind::kSoftware;
   options.pipeline.threads = 0;
   options.extra_sinks = {&window};
   VideoFolderSource source(dataset);

@@ -19,7 +19,7 @@ DecodedDatasetReport writeDecodedEuroc(const fs::path& video_folder, const fs::p
     throw InputError(fmt::format("{}: not a VOCA video folder (mav0/camN/data.mp4)", video_folder.string()));
   }
   DecoderOptions options;
-  options.backend = DecoderBackend::kSoftware;
+  options.kind = DecoderKind::kSoftware;
   options.export_motion = false;
   options.log_choice = false;
   StereoVideoReader reader(dataset, options);

@@ -20,7 +20,7 @@ struct DecodedDatasetReport {
 using DecodedDatasetProgress = std::function<void(std::int64_t done, std::int64_t total)>;
 
 // Decodes every frame of both cameras with the software decoder (the pixels do not depend on the
-// decoder backend). Throws InputError when the folder is not a VOCA video folder or a frame cannot be
+// decoder). Throws InputError when the folder is not a VOCA video folder or a frame cannot be
 // decoded, naming it; RuntimeFailure when out cannot be written.
 DecodedDatasetReport writeDecodedEuroc(const std::filesystem::path& video_folder, const std::filesystem::path& out,
                                        const DecodedDatasetProgress& progress = {});

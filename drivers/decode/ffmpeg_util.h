@@ -1,5 +1,6 @@
 #pragma once
-// Small RAII and error helpers around libav* used inside drivers/decode (not a public header).
+// Small RAII and error helpers around libav* used inside drivers/ (decode, and the RGB writer in encode; not a public
+// header).
 
 #include <string>
 

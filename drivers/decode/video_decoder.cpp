@@ -96,10 +96,10 @@ struct VideoDecoder::Impl {
   StreamInfo stream;
   DecoderOptions options;
   std::string source;
-  BackendChoice choice;
+  DecoderChoice choice;
   const AVCodecContext* pixel_context = nullptr;  // the libavcodec pixel decoder, if pixel is one
   std::unique_ptr<PixelDecoder> pixel;            // produces the output frames (software, or the hardware decoder)
-  CodecPtr motion;                                // hardware backends only: software parse for the motion vectors
+  CodecPtr motion;                                // hardware decoders only: software parse for the motion vectors
   BufferPtr hw_device;
   FramePtr frame, transfer;
   PacketPtr packet;
@@ -135,7 +135,7 @@ struct VideoDecoder::Impl {
   CodecPtr openSoftware(bool motion_only) const;
   CodecPtr openVaapi();
   CodecPtr openV4l2m2m() const;
-  void open(DecoderBackend backend);
+  void open(DecoderKind kind);
   void checkSend(int rc, const AVPacket* pkt, std::int64_t index);
   void drainMotion();
   void allocMotionSlots();
@@ -168,7 +168,7 @@ void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
   // Every stage and buffer is sized from the stream's header; a raw stream can switch to another
   // SPS mid-way. Checked on software frames only (a hardware wrapper may report aligned sizes)
   // and when the stream has a header size (a live source may not).
-  if ((motion || choice.backend == DecoderBackend::kSoftware) && stream.width > 0 &&
+  if ((motion || choice.kind == DecoderKind::kSoftware) && stream.width > 0 &&
       (parsed.width != stream.width || parsed.height != stream.height)) {
     throw InputError(source + ": frame " + std::to_string(frames_out) + " is " + std::to_string(parsed.width) + "x" +
                      std::to_string(parsed.height) + " but the stream starts at " + std::to_string(stream.width) + "x" +
@@ -279,7 +279,7 @@ CodecPtr VideoDecoder::Impl::openV4l2m2m() const {
   return ctx;
 }
 
-void VideoDecoder::Impl::open(DecoderBackend backend) {
+void VideoDecoder::Impl::open(DecoderKind kind) {
   pixel.reset();
   pixel_context = nullptr;
   motion.reset();
@@ -289,11 +289,11 @@ void VideoDecoder::Impl::open(DecoderBackend backend) {
     usePixel(openSoftware(true));
     return;
   }
-  switch (backend) {
-    case DecoderBackend::kVaapi:
+  switch (kind) {
+    case DecoderKind::kVaapi:
       usePixel(openVaapi());
       break;
-    case DecoderBackend::kV4l2m2m:
+    case DecoderKind::kV4l2m2m:
       usePixel(openV4l2m2m());
       break;
     default:
@@ -321,22 +321,22 @@ VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& optio
   d.init(stream, options, std::move(source_name));
 
   if (!options.decode_pixels) {
-    d.choice.backend = DecoderBackend::kSoftware;
+    d.choice.kind = DecoderKind::kSoftware;
     d.choice.description = "decoder: software (MV-only parse)";
   } else {
     const DecoderProbe system = probe == nullptr ? systemDecoderProbe() : DecoderProbe{};
-    d.choice = selectDecoderBackend(options.backend, stream.codec, options.vaapi_device, options.export_motion,
-                                    probe == nullptr ? system : *probe);
+    d.choice = selectDecoderKind(options.kind, stream.codec, options.vaapi_device, options.export_motion,
+                                 probe == nullptr ? system : *probe);
   }
   try {
-    d.open(d.choice.backend);
+    d.open(d.choice.kind);
   } catch (const RuntimeFailure& e) {
     // The probe said yes but opening failed after all: auto mode still falls back to software.
-    if (options.backend != DecoderBackend::kAuto || d.choice.backend == DecoderBackend::kSoftware) throw;
+    if (options.kind != DecoderKind::kAuto || d.choice.kind == DecoderKind::kSoftware) throw;
     d.choice.notes.push_back(e.what());
-    d.choice.backend = DecoderBackend::kSoftware;
-    d.choice.description = describeBackend(DecoderBackend::kSoftware, options.export_motion);
-    d.open(DecoderBackend::kSoftware);
+    d.choice.kind = DecoderKind::kSoftware;
+    d.choice.description = describeDecoder(DecoderKind::kSoftware, options.export_motion);
+    d.open(DecoderKind::kSoftware);
   }
   if (options.log_choice) logChoiceOnce(d.choice.description);
 }
@@ -349,9 +349,8 @@ VideoDecoder::VideoDecoder(const StreamInfo& stream, const DecoderOptions& optio
   d.init(stream, options, std::move(source_name));
   d.options.decode_pixels = true;
   // Reported as hardware: that is what the stand-in stands for.
-  d.choice.backend = options.backend == DecoderBackend::kAuto || options.backend == DecoderBackend::kSoftware
-                         ? DecoderBackend::kV4l2m2m
-                         : options.backend;
+  d.choice.kind = options.kind == DecoderKind::kAuto || options.kind == DecoderKind::kSoftware ? DecoderKind::kV4l2m2m
+                                                                                               : options.kind;
   d.choice.description =
       std::string("decoder: external pixel decoder") + (options.export_motion ? " (+ software MV parse)" : "");
   d.pixel = std::move(pixels);
@@ -362,7 +361,7 @@ VideoDecoder::~VideoDecoder() = default;
 
 std::int64_t VideoDecoder::pixelFramesDropped() const { return impl_->pixel_dropped; }
 
-DecoderBackend VideoDecoder::backend() const { return impl_->choice.backend; }
+DecoderKind VideoDecoder::kind() const { return impl_->choice.kind; }
 const std::string& VideoDecoder::description() const { return impl_->choice.description; }
 const StreamInfo& VideoDecoder::stream() const { return impl_->stream; }
 
@@ -459,7 +458,7 @@ void VideoDecoder::sendEnd() {
 void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
   const int width = pixels.width, height = pixels.height;
   // Hardware wrappers (V4L2 M2M) may not report the picture type; the software parse always does.
-  out.type = pictureType(&vectors != &pixels ? vectors.pict_type : pixels.pict_type);
+  const PictureType type = pictureType(&vectors != &pixels ? vectors.pict_type : pixels.pict_type);
   out.frame_index = frames_out;
   const std::int64_t pts = pixels.best_effort_timestamp != AV_NOPTS_VALUE ? pixels.best_effort_timestamp : pixels.pts;
   out.pts = pts == AV_NOPTS_VALUE ? kNoPts : pts;
@@ -494,8 +493,7 @@ void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, 
   if (out.motion.maxWidth() < width || out.motion.maxHeight() < height) {
     out.motion = MotionField(std::max(width, stream.width), std::max(height, stream.height));
   }
-  out.motion.reset(width, height, out.type);
-  out.motion.setSourceFrame(frames_out);
+  out.motion.reset(width, height, type);
   if (options.export_motion || !options.decode_pixels) {
     const AVFrameSideData* side = av_frame_get_side_data(&vectors, AV_FRAME_DATA_MOTION_VECTORS);
     if (side != nullptr) {

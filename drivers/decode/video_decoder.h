@@ -1,11 +1,11 @@
 #pragma once
-// Compressed packets -> DecodedFrame (luma plane, picture type, timestamp, motion field).
+// Compressed packets -> DecodedFrame (luma plane, timestamp, motion field with the picture type).
 
 #include <cstdint>
 #include <memory>
 #include <string>
 
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/demuxer.h"
 #include "drivers/decode/pixel_decoder.h"
 #include "voca/core/image.h"
@@ -15,12 +15,11 @@ namespace voca::decode {
 
 // One decoded picture. Buffers are sized for the stream on first use and reused afterwards.
 struct DecodedFrame {
-  GrayImage luma;  // the Y plane as coded (no colour conversion); empty for an MV-only parse
-  PictureType type = PictureType::kUnknown;
+  GrayImage luma;         // the Y plane as coded (no colour conversion); empty for an MV-only parse
   std::int64_t t_ns = 0;  // dataset timestamp when known (VideoReader), else pts in ns
   std::int64_t pts = kNoPts;
   std::int64_t frame_index = 0;  // output order, from 0
-  MotionField motion;            // empty (no vectors) when motion export is off
+  MotionField motion;            // picture type always; empty (no vectors) when motion export is off
   // Non-strict decoding only: the decoder flagged the picture as damaged (missing or corrupt
   // bitstream data, concealed). Strict decoding throws instead.
   bool damaged = false;
@@ -30,18 +29,18 @@ struct DecodedFrame {
 };
 
 struct DecoderOptions {
-  DecoderBackend backend = DecoderBackend::kAuto;
+  DecoderKind kind = DecoderKind::kAuto;
   bool export_motion = true;
   // false: parse only for the motion vectors (software, loop filter skipped, luma left empty).
   bool decode_pixels = true;
   std::string vaapi_device = "/dev/dri/renderD128";
   // Corrupt bitstream data is an error naming the frame instead of being concealed.
   bool strict = true;
-  bool log_choice = true;  // print the chosen backend to stderr (once per process and description)
+  bool log_choice = true;  // print the chosen decoder to stderr (once per process and description)
 };
 
 // Decodes one video stream on the calling thread. Software decoding uses one thread and no frame
-// threading (frame threading adds a frame of latency and reorders side data); hardware backends
+// threading (frame threading adds a frame of latency and reorders side data); hardware decoders
 // decode the pixels while a software context parses the same packets for the motion vectors; each
 // picture is paired with its vectors by pts, so a device that returns pictures out of order or drops
 // one still gets the right vectors on every picture it returns.
@@ -66,8 +65,8 @@ class VideoDecoder {
   // The next decoded frame, or false when none is ready (or the stream has ended).
   bool receive(DecodedFrame& frame);
 
-  DecoderBackend backend() const;
-  // Hardware backends: pictures the pixel decoder never returned (their vectors were parsed, then
+  DecoderKind kind() const;
+  // Hardware decoders: pictures the pixel decoder never returned (their vectors were parsed, then
   // given up once later pictures had come out); the frame is missing from the output, not wrong.
   std::int64_t pixelFramesDropped() const;
   const std::string& description() const;  // "decoder: software", "decoder: vaapi (+ software MV parse)"

@@ -57,7 +57,6 @@ void VideoReader::Impl::checkFrame(DecodedFrame& frame) {
     frame.t_ns = t_ns[static_cast<std::size_t>(frames)];
   }
   frame.frame_index = frames;
-  frame.motion.setSourceFrame(frames);
   ++frames;
 }
 

@@ -11,11 +11,7 @@
 
 #include <fmt/core.h>
 
-extern "C" {
-#include <libavcodec/avcodec.h>
-#include <libavformat/avformat.h>
-}
-
+#include "drivers/decode/video_reader.h"
 #include "voca/calib/calibration.h"
 #include "voca/core/error.h"
 #include "voca/image/png_io.h"
@@ -27,60 +23,23 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Decodes a video file and hands out its Y planes: the input side when re-encoding a VOCA video
-// folder. The Y plane is what our tracker sees, so it is re-encoded as is (no range conversion).
-void decodeLuma(const fs::path& path, int max_frames, const std::function<void(GrayView)>& emit) {
-  AVFormatContext* format = nullptr;
-  if (avformat_open_input(&format, path.c_str(), nullptr, nullptr) < 0) {
-    throw InputError(fmt::format("{}: cannot open the video", path.string()));
-  }
-  struct Cleanup {
-    AVFormatContext** format;
-    AVCodecContext* ctx = nullptr;
-    AVPacket* packet = nullptr;
-    AVFrame* frame = nullptr;
-    ~Cleanup() {
-      av_frame_free(&frame);
-      av_packet_free(&packet);
-      avcodec_free_context(&ctx);
-      avformat_close_input(format);
-    }
-  } cleanup{&format};
-  if (avformat_find_stream_info(format, nullptr) < 0) {
-    throw InputError(fmt::format("{}: cannot read the stream information", path.string()));
-  }
-  const AVCodec* codec = nullptr;
-  const int index = av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
-  if (index < 0 || codec == nullptr) throw InputError(fmt::format("{}: no decodable video stream", path.string()));
-  cleanup.ctx = avcodec_alloc_context3(codec);
-  cleanup.packet = av_packet_alloc();
-  cleanup.frame = av_frame_alloc();
-  if (!cleanup.ctx || !cleanup.packet || !cleanup.frame) throw RuntimeFailure("out of memory opening a decoder");
-  avcodec_parameters_to_context(cleanup.ctx, format->streams[index]->codecpar);
-  if (avcodec_open2(cleanup.ctx, codec, nullptr) < 0) {
-    throw InputError(fmt::format("{}: cannot open the {} decoder", path.string(), codec->name));
-  }
+// Decodes a camera's video with the one decoder and hands out its Y planes: the input side when
+// re-encoding a VOCA video folder. The Y plane is what our tracker sees, so it is re-encoded as is
+// (no range conversion).
+void decodeLuma(const Dataset& dataset, const fs::path& path, int max_frames,
+                const std::function<void(GrayView)>& emit) {
+  decode::DecoderOptions options;
+  options.kind = decode::DecoderKind::kSoftware;
+  options.export_motion = false;
+  options.strict = false;  // a damaged picture is re-encoded as the decoder conceals it
+  options.log_choice = false;
+  decode::VideoReader reader(path, decode::datasetTimestamps(dataset), options);
+  decode::DecodedFrame frame;
   int emitted = 0;
-  const auto receive = [&] {
-    while (emitted < max_frames && avcodec_receive_frame(cleanup.ctx, cleanup.frame) == 0) {
-      const AVFrame& f = *cleanup.frame;
-      emit(GrayView{f.data[0], f.width, f.height, f.linesize[0]});
-      ++emitted;
-      av_frame_unref(cleanup.frame);
-    }
-  };
-  while (emitted < max_frames && av_read_frame(format, cleanup.packet) >= 0) {
-    if (cleanup.packet->stream_index == index) {
-      const int ret = avcodec_send_packet(cleanup.ctx, cleanup.packet);
-      av_packet_unref(cleanup.packet);
-      if (ret < 0) throw InputError(fmt::format("{}: corrupt packet after frame {}", path.string(), emitted));
-      receive();
-    } else {
-      av_packet_unref(cleanup.packet);
-    }
+  while (emitted < max_frames && reader.next(frame)) {
+    emit(frame.luma.view());
+    ++emitted;
   }
-  avcodec_send_packet(cleanup.ctx, nullptr);
-  receive();
   if (emitted < max_frames) {
     throw InputError(fmt::format("{}: holds {} frames but data.csv lists {}", path.string(), emitted, max_frames));
   }
@@ -188,7 +147,9 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
     if (dataset.layout == DatasetLayout::kVocaVideo) {
       const fs::path video = camera == 0 ? dataset.video_left : dataset.video_right;
       cam_report.input_bytes = fileSize(video);
-      source = [&, video](const std::function<void(GrayView)>& emit) { decodeLuma(video, report.num_frames, emit); };
+      source = [&, video](const std::function<void(GrayView)>& emit) {
+        decodeLuma(dataset, video, report.num_frames, emit);
+      };
     } else {
       for (const StereoFrameRef& frame : dataset.frames) {
         cam_report.input_bytes += fileSize(camera == 0 ? frame.left : frame.right);

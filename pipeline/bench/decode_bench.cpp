@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cstdint>
 
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/video_decoder.h"
 #include "platform/realtime/clock.h"
 #include "voca/core/error.h"
@@ -81,9 +81,9 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   variants[1].export_motion = false;
   result.variants[2].label = "MV-only parse (loop filter skipped)";
   variants[2].decode_pixels = false;
-  const DecoderBackend backend = parseBackend(opts.decoder);
+  const DecoderKind kind = parseDecoderKind(opts.decoder);
   for (DecoderOptions& v : variants) {
-    v.backend = backend;
+    v.kind = kind;
     v.log_choice = false;
   }
   result.decoder_description = VideoDecoder(stream, variants[0], nullptr, "bench").description();

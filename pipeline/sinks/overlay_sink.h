@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "drivers/decode/rgb_video_writer.h"
+#include "drivers/encode/rgb_video_writer.h"
 #include "pipeline/sinks/sink_stage.h"
 #include "voca/core/image.h"
 
@@ -23,7 +23,7 @@ class OverlaySink final : public FrameSink {
   void finish() override;
 
  private:
-  decode::RgbVideoWriter writer_;
+  encode::RgbVideoWriter writer_;
   RgbImage image_;
 };
 

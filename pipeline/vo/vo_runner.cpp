@@ -251,7 +251,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   int decode_position = -1;
   if (info.kind == SourceKind::kEncoded) {
     DecodeStageOptions decode_options;
-    decode_options.decoder.backend = options.decoder;
+    decode_options.decoder.kind = options.decoder;
     decode_options.decoder.strict = options.strict;
     decode_options.decoder.log_choice = false;
     for (std::size_t c = 0; c < 2; ++c) {

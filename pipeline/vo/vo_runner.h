@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "drivers/dataset/dataset.h"
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 #include "drivers/source/stereo_source.h"
 #include "pipeline/runtime/runner.h"
 #include "pipeline/sinks/sink_stage.h"
@@ -38,7 +38,7 @@ struct VoRunOptions {
   int max_frames = 0;                   // 0 = all
   int max_points = 1000;                // frontend capacity per camera
   bool estimate = true;                 // false: frontend only (`voca track`)
-  decode::DecoderBackend decoder = decode::DecoderBackend::kAuto;
+  decode::DecoderKind decoder = decode::DecoderKind::kAuto;
   // Stream URLs: how long to wait for the stream to begin, and the silence that ends it.
   double stream_start_timeout_s = 30.0;
   double stream_timeout_s = 3.0;

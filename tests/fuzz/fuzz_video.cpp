@@ -37,7 +37,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // Refuse absurd frame sizes before the decoder allocates them: the pipeline would too.
     if (static_cast<long long>(stream.width) * stream.height > 4096LL * 4096LL) return;
     voca::decode::DecoderOptions options;
-    options.backend = voca::decode::DecoderBackend::kSoftware;
+    options.kind = voca::decode::DecoderKind::kSoftware;
     options.strict = false;
     options.log_choice = false;
     voca::decode::VideoDecoder decoder(stream, options, nullptr, "fuzz");

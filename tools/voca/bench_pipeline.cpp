@@ -75,7 +75,7 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
     if (!opts.config.empty()) options.config = opts.config;
     if (!opts.mode.empty()) options.mode = requirePriorMode(opts.mode, "--mode");
     options.max_frames = opts.frames;
-    options.decoder = decode::parseBackend(opts.decoder);
+    options.decoder = decode::parseDecoderKind(opts.decoder);
     options.progress = false;
     options.keep_trajectory = false;
     options.pipeline.threads = threads;

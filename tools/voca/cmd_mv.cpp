@@ -14,8 +14,8 @@
 #include <fmt/core.h>
 
 #include "drivers/dataset/dataset.h"
-#include "drivers/decode/rgb_video_writer.h"
 #include "drivers/decode/video_reader.h"
+#include "drivers/encode/rgb_video_writer.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 #include "voca/image/draw.h"
@@ -106,6 +106,7 @@ void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage
 
 int runMv(const MvOptions& opts) {
   using namespace voca::decode;
+  using voca::encode::RgbVideoWriter;
   if (opts.format != "png" && opts.format != "mp4") {
     throw voca::InputError("--format '" + opts.format + "': expected png or mp4");
   }
@@ -114,7 +115,7 @@ int runMv(const MvOptions& opts) {
   }
   const FrameRange range = parseFrameRange(opts.frames);
   DecoderOptions decoder_options;
-  decoder_options.backend = parseBackend(opts.decoder);
+  decoder_options.kind = parseDecoderKind(opts.decoder);
 
   std::unique_ptr<VideoReader> reader;
   if (fs::is_directory(opts.input)) {
@@ -159,8 +160,8 @@ int runMv(const MvOptions& opts) {
     }
     ++written;
     fmt::print(stderr, "\rframe {}{} ({}): {} vectors, {} flagged    ", frame.frame_index,
-               expected > 0 ? fmt::format("/{}", expected) : std::string(), voca::pictureTypeName(frame.type),
-               frame.motion.blocks().size(), outliers);
+               expected > 0 ? fmt::format("/{}", expected) : std::string(),
+               voca::pictureTypeName(frame.motion.pictureType()), frame.motion.blocks().size(), outliers);
   }
   if (video) video->finish();
   fmt::print(stderr, "\n");
@@ -184,8 +185,7 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--frames", opts->frames, "Frame range a:b (a inclusive, b exclusive; either may be omitted)");
       app.add_option("--format", opts->format, "png (one mv_<frame>.png per frame) or mp4 (mv.mp4)")
           ->capture_default_str();
-      app.add_option("--decoder", opts->decoder, "Decoder backend: auto, software, vaapi, v4l2m2m")
-          ->capture_default_str();
+      app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi, v4l2m2m")->capture_default_str();
       app.add_option("--arrow-scale", opts->arrow_scale, "Multiply arrow lengths by this for visibility")
           ->capture_default_str();
       app.add_option("--outlier-radius", opts->outliers.radius_px,

@@ -57,7 +57,7 @@ void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& option
   options.realtime = cli.realtime;
   options.speed = cli.speed;
   options.strict = cli.strict;
-  options.decoder = decode::parseBackend(cli.decoder);
+  options.decoder = decode::parseDecoderKind(cli.decoder);
   options.pipeline.trace_path = cli.trace;
   options.statistics_file = cli.stats;
 }

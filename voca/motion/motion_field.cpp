@@ -70,7 +70,6 @@ void MotionField::reset(int width, int height, PictureType type) {
   height_ = height;
   grid_stride_ = static_cast<std::size_t>((width + kCellPx - 1) / kCellPx);
   type_ = type;
-  source_frame_ = -1;
   blocks_.clear();
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height + kCellPx - 1) / kCellPx);
   std::fill_n(grid_.begin(), static_cast<std::ptrdiff_t>(cells), kNoBlock);
@@ -140,7 +139,6 @@ void MotionField::copyFrom(const MotionField& other) {
   height_ = other.height_;
   grid_stride_ = other.grid_stride_;
   type_ = other.type_;
-  source_frame_ = other.source_frame_;
   blocks_.assign(other.blocks_.begin(), other.blocks_.end());
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height_ + kCellPx - 1) / kCellPx);
   std::copy_n(other.grid_.begin(), static_cast<std::ptrdiff_t>(cells), grid_.begin());

@@ -98,10 +98,6 @@ class MotionField {
   int height() const { return height_; }
   PictureType pictureType() const { return type_; }
 
-  // Index of the frame the vectors were decoded from. Set by the decoder.
-  std::int64_t sourceFrame() const { return source_frame_; }
-  void setSourceFrame(std::int64_t frame) { source_frame_ = frame; }
-
   // Copy another field's blocks, grid, size and flags into this one without allocating (capacity
   // must suffice: throws std::length_error otherwise).
   void copyFrom(const MotionField& other);
@@ -114,7 +110,6 @@ class MotionField {
   int width_ = 0, height_ = 0;
   std::size_t grid_stride_ = 0;
   PictureType type_ = PictureType::kUnknown;
-  std::int64_t source_frame_ = -1;
   std::vector<MotionBlock> blocks_;
   std::vector<std::int32_t> grid_;
   // Scratch for flagOutliers(), sized at construction.

@@ -7,7 +7,7 @@
 
 #include "voca/core/image.h"
 
-namespace voca::decode {
+namespace voca::encode {
 
 class RgbVideoWriter {
  public:
@@ -27,4 +27,4 @@ class RgbVideoWriter {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace voca::decode
+}  // namespace voca::encode

@@ -1,4 +1,4 @@
-#include "drivers/decode/rgb_video_writer.h"
+#include "drivers/encode/rgb_video_writer.h"
 
 #include <string>
 
@@ -10,8 +10,10 @@ extern "C" {
 #include <libswscale/swscale.h>
 }
 
-namespace voca::decode {
+namespace voca::encode {
 
+// The libav* RAII helpers shared by the drivers (header-only).
+namespace detail = decode::detail;
 using detail::avErrorText;
 
 struct RgbVideoWriter::Impl {
@@ -146,4 +148,4 @@ void RgbVideoWriter::finish() {
   d.check(av_write_trailer(d.format), "cannot finish the mp4");
 }
 
-}  // namespace voca::decode
+}  // namespace voca::encode

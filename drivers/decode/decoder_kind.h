@@ -1,5 +1,5 @@
 #pragma once
-// Choosing a decoder backend: hardware for pixels when a device is there (plus a software parse for
+// Choosing a decoder: hardware for pixels when a device is there (plus a software parse for
 // the motion vectors), software otherwise. The choice is a pure function of a device probe so it can
 // be tested without devices.
 
@@ -12,13 +12,13 @@
 
 namespace voca::decode {
 
-enum class DecoderBackend { kAuto, kSoftware, kVaapi, kV4l2m2m };
+enum class DecoderKind { kAuto, kSoftware, kVaapi, kV4l2m2m };
 
-const char* backendName(DecoderBackend backend);
+const char* decoderKindName(DecoderKind kind);
 // Parses "auto", "software", "vaapi", "v4l2m2m"; throws InputError naming the accepted values.
-DecoderBackend parseBackend(std::string_view text);
+DecoderKind parseDecoderKind(std::string_view text);
 
-// What the machine offers. Each function answers for one backend; the system probe really opens
+// What the machine offers. Each function answers for one decoder kind; the system probe really opens
 // the device, a test injects answers.
 struct DecoderProbe {
   // The VAAPI render node exists.
@@ -33,21 +33,21 @@ struct DecoderProbe {
 // The probe of this machine.
 DecoderProbe systemDecoderProbe();
 
-// The outcome: the backend to use, the one-line description to log ("decoder: software",
+// The outcome: the decoder kind to use, the one-line description to log ("decoder: software",
 // "decoder: vaapi (+ software MV parse)") and why hardware was not taken.
-struct BackendChoice {
-  DecoderBackend backend = DecoderBackend::kSoftware;
+struct DecoderChoice {
+  DecoderKind kind = DecoderKind::kSoftware;
   std::string description;
   std::vector<std::string> notes;
 };
 
-// kAuto tries VAAPI, then V4L2 M2M, then software. An explicitly requested hardware backend that is
+// kAuto tries VAAPI, then V4L2 M2M, then software. An explicitly requested hardware decoder that is
 // not usable throws voca::InputError saying why (the user asked for it; silently decoding in
 // software would hide a misconfiguration). Software needs no probe.
-BackendChoice selectDecoderBackend(DecoderBackend requested, VideoCodec codec, const std::string& vaapi_device,
-                                   bool export_motion, const DecoderProbe& probe);
+DecoderChoice selectDecoderKind(DecoderKind requested, VideoCodec codec, const std::string& vaapi_device,
+                                bool export_motion, const DecoderProbe& probe);
 
-// "decoder: <backend>[ (+ software MV parse)]".
-std::string describeBackend(DecoderBackend backend, bool export_motion);
+// "decoder: <kind>[ (+ software MV parse)]".
+std::string describeDecoder(DecoderKind kind, bool export_motion);
 
 }  // namespace voca::decode

@@ -1,4 +1,4 @@
-#include "drivers/decode/backend.h"
+#include "drivers/decode/decoder_kind.h"
 
 #include <filesystem>
 
@@ -12,67 +12,66 @@ extern "C" {
 
 namespace voca::decode {
 
-const char* backendName(DecoderBackend backend) {
-  switch (backend) {
-    case DecoderBackend::kAuto:
+const char* decoderKindName(DecoderKind kind) {
+  switch (kind) {
+    case DecoderKind::kAuto:
       return "auto";
-    case DecoderBackend::kSoftware:
+    case DecoderKind::kSoftware:
       return "software";
-    case DecoderBackend::kVaapi:
+    case DecoderKind::kVaapi:
       return "vaapi";
-    case DecoderBackend::kV4l2m2m:
+    case DecoderKind::kV4l2m2m:
       return "v4l2m2m";
   }
   return "?";
 }
 
-DecoderBackend parseBackend(std::string_view text) {
-  for (DecoderBackend b :
-       {DecoderBackend::kAuto, DecoderBackend::kSoftware, DecoderBackend::kVaapi, DecoderBackend::kV4l2m2m}) {
-    if (text == backendName(b)) return b;
+DecoderKind parseDecoderKind(std::string_view text) {
+  for (DecoderKind b : {DecoderKind::kAuto, DecoderKind::kSoftware, DecoderKind::kVaapi, DecoderKind::kV4l2m2m}) {
+    if (text == decoderKindName(b)) return b;
   }
-  throw InputError("decoder backend '" + std::string(text) + "': expected auto, software, vaapi or v4l2m2m");
+  throw InputError("decoder '" + std::string(text) + "': expected auto, software, vaapi or v4l2m2m");
 }
 
-std::string describeBackend(DecoderBackend backend, bool export_motion) {
-  std::string text = std::string("decoder: ") + backendName(backend);
-  if (backend != DecoderBackend::kSoftware && export_motion) text += " (+ software MV parse)";
+std::string describeDecoder(DecoderKind kind, bool export_motion) {
+  std::string text = std::string("decoder: ") + decoderKindName(kind);
+  if (kind != DecoderKind::kSoftware && export_motion) text += " (+ software MV parse)";
   return text;
 }
 
-BackendChoice selectDecoderBackend(DecoderBackend requested, VideoCodec codec, const std::string& vaapi_device,
-                                   bool export_motion, const DecoderProbe& probe) {
-  BackendChoice choice;
-  auto take = [&](DecoderBackend backend) {
-    choice.backend = backend;
-    choice.description = describeBackend(backend, export_motion);
+DecoderChoice selectDecoderKind(DecoderKind requested, VideoCodec codec, const std::string& vaapi_device,
+                                bool export_motion, const DecoderProbe& probe) {
+  DecoderChoice choice;
+  auto take = [&](DecoderKind kind) {
+    choice.kind = kind;
+    choice.description = describeDecoder(kind, export_motion);
     return choice;
   };
-  if (requested == DecoderBackend::kSoftware) return take(DecoderBackend::kSoftware);
+  if (requested == DecoderKind::kSoftware) return take(DecoderKind::kSoftware);
 
-  if (requested == DecoderBackend::kAuto || requested == DecoderBackend::kVaapi) {
+  if (requested == DecoderKind::kAuto || requested == DecoderKind::kVaapi) {
     if (!probe.vaapi_device_present || !probe.vaapi_device_present(vaapi_device)) {
       choice.notes.push_back("vaapi: no render node " + vaapi_device);
     } else if (!probe.vaapi_open || !probe.vaapi_open(vaapi_device, codec)) {
       choice.notes.push_back("vaapi: cannot open " + vaapi_device + " for " + videoCodecName(codec) +
                              " (driver missing or codec not supported by the GPU)");
     } else {
-      return take(DecoderBackend::kVaapi);
+      return take(DecoderKind::kVaapi);
     }
-    if (requested == DecoderBackend::kVaapi) {
-      throw InputError("decoder backend vaapi requested but unusable: " + choice.notes.back() +
+    if (requested == DecoderKind::kVaapi) {
+      throw InputError("decoder vaapi requested but unusable: " + choice.notes.back() +
                        "; use --decoder software or auto");
     }
   }
-  if (requested == DecoderBackend::kAuto || requested == DecoderBackend::kV4l2m2m) {
-    if (probe.v4l2m2m_present && probe.v4l2m2m_present(codec)) return take(DecoderBackend::kV4l2m2m);
+  if (requested == DecoderKind::kAuto || requested == DecoderKind::kV4l2m2m) {
+    if (probe.v4l2m2m_present && probe.v4l2m2m_present(codec)) return take(DecoderKind::kV4l2m2m);
     choice.notes.push_back(std::string("v4l2m2m: no memory-to-memory decoder for ") + videoCodecName(codec));
-    if (requested == DecoderBackend::kV4l2m2m) {
-      throw InputError("decoder backend v4l2m2m requested but unusable: " + choice.notes.back() +
+    if (requested == DecoderKind::kV4l2m2m) {
+      throw InputError("decoder v4l2m2m requested but unusable: " + choice.notes.back() +
                        "; use --decoder software or auto");
     }
   }
-  return take(DecoderBackend::kSoftware);
+  return take(DecoderKind::kSoftware);
 }
 
 namespace detail {
