@@ -17,7 +17,6 @@ void FrontendStats::reserve(std::size_t max_points) {
 void FrontendStats::clear() {
   temporal = {};
   bridged = {false, false};
-  prior_levels = {0, 0};
   detected = detected_right_only = stereo_matched = epipolar_rejected = num_left = num_right = 0;
   guess_dist_plain_px.clear();
   guess_dist_prior_px.clear();
@@ -25,12 +24,6 @@ void FrontendStats::clear() {
 }
 
 namespace {
-
-// A guess within about this many pixels of a level's own resolution converges on that level alone
-// (the 52-point pattern spans 15 px; the binomial pyramid keeps gradients smooth at that range).
-constexpr float kLevelCapturePx = 2.f;
-// Fewer prior distances than this in a frame say too little about the next one: use every level.
-constexpr std::size_t kMinPriorSamples = 20;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -79,9 +72,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
     cam.resetSlots();
     cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes);
-    cam.prior_levels = num_levels_;
   }
-  distance_scratch_.reserve(static_cast<std::size_t>(max_points_));
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
   T_cam1_cam0_ = T_cam0_cam1.inverse();
   // f0 ~ R f1 + t up to depth; f0 . (t x R f1) = 0. t normalised so the threshold is scale-free.
@@ -146,39 +137,34 @@ void KltFrontend::reset() {
     cam.resetSlots();
     cam.traces.clear();
     cam.bridge.clear();
-    cam.prior_levels = num_levels_;
   }
   have_previous_ = false;
 }
 
 bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked, int levels) const {
+                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const {
   SE2f T_forward(0.f, p + flow_guess);
-  if (trackPatch(forward.first(static_cast<std::size_t>(levels)), to, *pattern_, align_, T_forward) !=
-      AlignStatus::kConverged)
-    return false;
+  if (trackPatch(forward, to, *pattern_, align_, T_forward) != AlignStatus::kConverged) return false;
   tracked = T_forward.translation();
   return true;
 }
 
 bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                                 const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                                std::span<PatchTemplate> backward, int levels) const {
+                                std::span<PatchTemplate> backward) const {
   // The backward track starts from the negated guess, so a correct prior lands it near p again.
   SE2f T_backward(0.f, tracked - flow_guess);
-  buildPyramidPatch(to, tracked, *pattern_, backward);  // every level: the next frame's forward templates
-  if (trackPatch(backward.first(static_cast<std::size_t>(levels)), from, *pattern_, align_, T_backward) !=
-      AlignStatus::kConverged)
-    return false;
+  buildPyramidPatch(to, tracked, *pattern_, backward);
+  if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
   return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
 }
 
 bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                                const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess,
-                               std::span<PatchTemplate> backward, Eigen::Vector2f& result, int levels) const {
+                               std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
   Eigen::Vector2f tracked;
-  if (!trackForward(forward, to, p, flow_guess, tracked, levels)) return false;
-  if (!checkBackward(from, to, p, tracked, flow_guess, backward, levels)) return false;
+  if (!trackForward(forward, to, p, flow_guess, tracked)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, backward)) return false;
   result = tracked;
   return true;
 }
@@ -187,17 +173,6 @@ const MotionField* KltFrontend::priorField(int camera, const DecodedStereoFrame&
   if (!input.has_motion || config_.prior_mode == PriorMode::kNone) return nullptr;
   const auto c = static_cast<std::size_t>(camera);
   return cameras_[c].bridge.prior(input.motion[c], input.frames_missing_before, stats.bridged[c]);
-}
-
-int KltFrontend::priorLevels(std::span<const float> distances) {
-  if (distances.size() < kMinPriorSamples) return num_levels_;
-  distance_scratch_.assign(distances.begin(), distances.end());
-  const auto p90 = distance_scratch_.begin() + static_cast<std::ptrdiff_t>(9 * (distances.size() - 1) / 10);
-  std::nth_element(distance_scratch_.begin(), p90, distance_scratch_.end());
-  // Level l's pixels are 2^l level-0 pixels, so the finest `levels` levels capture 2^(levels-1) times more.
-  int levels = 1;
-  while (levels<num_levels_&& * p90> kLevelCapturePx * static_cast<float>(1 << (levels - 1))) ++levels;
-  return levels;
 }
 
 void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendStats& stats) {
@@ -213,13 +188,6 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   cam.traces.clear();
   ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
-  // Motion-vector guesses are tracked first on the levels the last frame's prior distances call for,
-  // and again on the whole pyramid when that fails. A bridged prior (an earlier P-frame's vectors) is
-  // not what those distances measured.
-  const int prior_levels = stats.bridged[static_cast<std::size_t>(camera)] ? num_levels_ : cam.prior_levels;
-  if (field != nullptr) stats.prior_levels[static_cast<std::size_t>(camera)] = prior_levels;
-  const bool prior_retry = prior_levels < num_levels_;
-  const std::size_t first_distance = stats.guess_dist_prior_px.size();
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
@@ -250,34 +218,27 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     }
     const int forward_slot = cam.slots[i];
     const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
-    const auto attempt = [&](const Eigen::Vector2f& guess, int backward_slot, Eigen::Vector2f& tracked, int levels) {
-      return trackChecked(cam.slot(forward_slot), from, to, p, guess, cam.slot(backward_slot), tracked, levels);
-    };
-    const auto attempt_prior = [&] {
-      return attempt(mv, prior_slot, prior_px, prior_levels) ||
-             (prior_retry && attempt(mv, prior_slot, prior_px, num_levels_));
+    const auto attempt = [&](const Eigen::Vector2f& guess, int backward_slot, Eigen::Vector2f& tracked) {
+      return trackChecked(cam.slot(forward_slot), from, to, p, guess, cam.slot(backward_slot), tracked);
     };
     if (mode == PriorMode::kMvParallelOf && run_prior) {
-      // When the two forward tracks agree and the plain one passes its round trip, the point is kept
-      // from the plain track whatever the prior's round trip says, so that one is skipped; the
-      // outcome equals running both checks.
-      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, plain_px, num_levels_);
-      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, cam.slot(plain_slot), num_levels_);
-      const auto prior_on = [&](int levels) {
-        const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px, levels);
-        const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
-        return (agree && plain_ok) ||
-               (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot), levels));
-      };
-      prior_ok = prior_on(prior_levels) || (prior_retry && prior_on(num_levels_));
+      // Both forward tracks first. When they agree and the plain one passes its round trip, the
+      // point is kept from the plain track whatever the prior's round trip says, so that one is
+      // skipped; the outcome equals running both checks.
+      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, plain_px);
+      const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px);
+      const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
+      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, cam.slot(plain_slot));
+      prior_ok =
+          (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot)));
     } else {
       if (mode == PriorMode::kMvThenOf && run_prior) {
-        prior_ok = attempt_prior();
+        prior_ok = attempt(mv, prior_slot, prior_px);
         run_plain = !prior_ok;
       }
-      if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px, num_levels_);
+      if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
       if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
-      if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt_prior();
+      if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
     }
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
@@ -331,9 +292,6 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
   std::swap(cam.slots, cam.next_slots);
-  if (field != nullptr) {
-    cam.prior_levels = priorLevels(std::span<const float>(stats.guess_dist_prior_px).subspan(first_distance));
-  }
 }
 
 void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats) {
@@ -363,8 +321,7 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
     }
     Eigen::Vector2f matched;
     const int right_slot = right.acquire();
-    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, right.slot(right_slot), matched,
-                     num_levels_)) {
+    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, right.slot(right_slot), matched)) {
       right.ids.push_back(id);
       right.points.push_back(matched);
       right.slots.push_back(right_slot);

@@ -44,14 +44,11 @@ struct FrontendStats {
   std::int64_t frame_index = 0;
   std::array<TemporalStats, 2> temporal{};
   std::array<bool, 2> bridged{false, false};  // the camera's prior came from an earlier P-frame
-  // Pyramid levels the camera's motion-vector guesses were tracked on first (the finest ones, chosen
-  // from how close the last frame's guesses landed; a failure retries on every level). 0: no prior.
-  std::array<int, 2> prior_levels{0, 0};
-  int detected = 0;                 // new left points
-  int detected_right_only = 0;      // new right points where the left camera does not see
-  int stereo_matched = 0;           // of the new points, found in the right image
-  int epipolar_rejected = 0;        // right observations dropped by the epipolar check
-  int num_left = 0, num_right = 0;  // observations output
+  int detected = 0;                           // new left points
+  int detected_right_only = 0;                // new right points where the left camera does not see
+  int stereo_matched = 0;                     // of the new points, found in the right image
+  int epipolar_rejected = 0;                  // right observations dropped by the epipolar check
+  int num_left = 0, num_right = 0;            // observations output
   // For every kept temporal track that had a motion vector, the distance from each initial guess
   // (previous position: plain; previous position + vector: prior) to the converged position, in
   // pixels, both cameras (the paper's Fig. 5). Paired by index.
@@ -106,8 +103,7 @@ class KltFrontend {
     std::vector<PatchTemplate> pool;
     std::vector<int> free_slots;
     int num_levels = 0;
-    IFrameBridge bridge;   // chooses the motion prior, carrying P-frame vectors over I-frames
-    int prior_levels = 0;  // levels the next frame's motion-vector guesses are tracked on first
+    IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     std::vector<PointTrace> traces;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
@@ -127,20 +123,15 @@ class KltFrontend {
   // when both directions converge and the round trip returns within max_recovered_dist2.
   // `forward` holds the templates of p in `from` (shared by all guesses of one point); `backward`
   // receives the templates at the result in `to`.
-  // Both tracks use the finest `levels` pyramid levels (the coarser ones only widen the capture range,
-  // which a guess known to land close does not need); `backward` receives templates on every level.
   bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                     const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, std::span<PatchTemplate> backward,
-                    Eigen::Vector2f& result, int levels) const;
+                    Eigen::Vector2f& result) const;
   // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
   bool trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked, int levels) const;
+                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const;
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                      const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                     std::span<PatchTemplate> backward, int levels) const;
-  // How many pyramid levels a motion-vector guess needs, from how close the camera's prior guesses
-  // landed in the last frame (distances[begin, end) of FrontendStats::guess_dist_prior_px).
-  int priorLevels(std::span<const float> distances);
+                     std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
@@ -164,7 +155,6 @@ class KltFrontend {
   std::vector<std::uint8_t> right_overlap_;  // per right-image cell, non-zero: the left camera sees it
   GridDetector detector_;
   std::vector<Eigen::Vector2f> new_points_;
-  std::vector<float> distance_scratch_;  // priorLevels' copy for the quantile
   std::array<CameraState, 2> cameras_;
   std::uint64_t next_track_id_ = 1;
   bool have_previous_ = false;
