@@ -118,6 +118,17 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   CHECK(bench.text.find("fps") != std::string::npos);
   CHECK(bench.text.find("MV-only parse vectors identical to full decode: yes") != std::string::npos);
 
+  // voca bench frontend: a row per mode (comma-separated list) with the target verdict.
+  const auto frontend =
+      runVocaOutput("bench frontend " + video.string() + " --calib " + (scratch / "odd_calib.json").string() +
+                    " --repeat 1 --modes none,mv_parallel_of");
+  requireSuccess(frontend, "voca bench frontend");
+  INFO("voca bench frontend printed:\n" << frontend.text);
+  CHECK(frontend.text.find("\nnone ") != std::string::npos);
+  CHECK(frontend.text.find("\nmv_parallel_of ") != std::string::npos);
+  CHECK(frontend.text.find("\nmv ") == std::string::npos);
+  CHECK(frontend.text.find("target per stereo frame on one core, every mode: median <= 4 ms") != std::string::npos);
+
   // voca bench backend: the estimator timed alone on the frontend's real tracks of this video.
   const auto backend = runVocaOutput("bench backend " + video.string() + " --calib " +
                                      (scratch / "odd_calib.json").string() + " --warmup 10");

@@ -7,7 +7,6 @@
 #include <fmt/core.h>
 
 #include <algorithm>
-#include <fstream>
 #include <memory>
 #include <thread>
 
@@ -16,9 +15,11 @@
 #include "pipeline/harness/bench_sequence.h"
 #include "pipeline/vo/vo_runner.h"
 #include "platform/filesystem/temp_dir.h"
+#include "platform/machine/cpu_info.h"
 #include "platform/process/child_process.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 #include "voca/frontend/simd4.h"
 
 namespace voca::cli {
@@ -34,28 +35,15 @@ struct FrontendBenchOptions {
   int frames = 0;
   int repeat = 3;
   int max_points = 1000;
-  std::vector<std::string> modes = {"none", "mv", "of_then_mv", "mv_then_of", "mv_parallel_of"};
+  std::vector<std::string> modes = [] {
+    std::vector<std::string> names;
+    for (PriorMode mode : kAllPriorModes) names.emplace_back(priorModeName(mode));
+    return names;
+  }();
 };
 
 // The frontend budget per stereo frame on one core, on the moving sequences.
 constexpr double kTargetMedianMs = 4.0;
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t index =
-      std::min(values.size() - 1, static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5));
-  return values[index];
-}
-
-std::string cpuModel() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos) return line.substr(line.find(':') + 2);
-  }
-  return "unknown CPU";
-}
 
 int runFrontendBench(const FrontendBenchOptions& opts) {
   if (opts.repeat < 1) throw InputError(fmt::format("--repeat: expected at least 1, got {}", opts.repeat));
@@ -92,7 +80,7 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
   fmt::print(
       "machine: {} ({} hardware threads, KLT kernels: {}); frontend on one thread, thread CPU time per "
       "stereo frame\n",
-      cpuModel(), std::thread::hardware_concurrency(), simd4::Native::kName);
+      platform::cpuModel(), std::thread::hardware_concurrency(), simd4::Native::kName);
   fmt::print("{:<16} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}  {}\n", "mode", "median ms", "p99 ms", "mean ms", "wall p50",
              "left pts", "right pts", fmt::format("target (<= {} ms)", kTargetMedianMs));
   for (PriorMode mode : modes) {
@@ -125,10 +113,10 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
     double mean = 0.0;
     for (double v : cpu_ms) mean += v;
     const double counted = static_cast<double>(std::max<std::size_t>(1, cpu_ms.size()));
-    const double median = percentile(cpu_ms, 0.5), p99 = percentile(cpu_ms, 0.99);
+    const double median = quantile(cpu_ms, 0.5), p99 = quantile(cpu_ms, 0.99);
     const char* verdict = median > kTargetMedianMs ? "missed" : p99 > 2.0 * median ? "missed (p99)" : "met";
     fmt::print("{:<16} {:9.3f} {:9.3f} {:9.3f} {:9.3f} {:10.0f} {:10.0f}  {}\n", priorModeName(mode), median, p99,
-               mean / counted, percentile(wall_ms, 0.5), left_points / counted, right_points / counted, verdict);
+               mean / counted, quantile(wall_ms, 0.5), left_points / counted, right_points / counted, verdict);
   }
   fmt::print("target per stereo frame on one core, every mode: median <= {} ms, p99 <= 2x median\n", kTargetMedianMs);
   return 0;
@@ -154,7 +142,9 @@ Runner configureFrontendBench(CLI::App& app) {
   app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
   app.add_option("--repeat", opts->repeat, "Runs over the sequence per mode")->capture_default_str();
   app.add_option("--max-points", opts->max_points, "Frontend capacity: points per camera")->capture_default_str();
-  app.add_option("--modes", opts->modes, "Prior modes to time")->capture_default_str();
+  app.add_option("--modes", opts->modes, "Prior modes to time (space- or comma-separated)")
+      ->delimiter(',')
+      ->capture_default_str();
   app.footer(
       "Runs the pipeline without the backend, every stage in one thread, for each prior mode, and prints\n"
       "the frontend stage's thread CPU time per stereo frame (median, p99, mean; decoding is its own stage\n"
