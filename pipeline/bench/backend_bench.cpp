@@ -2,7 +2,6 @@
 
 #include <fmt/core.h>
 
-#include "drivers/dataset/dataset.h"
 #include "pipeline/sinks/sink_stage.h"
 #include "platform/realtime/clock.h"
 #include "voca/backend/estimator.h"
@@ -26,14 +25,6 @@ class TrackRecorder final : public FrameSink {
 
 std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options) {
   TrackRecording recording;
-  const Dataset dataset = openDataset(options.input);
-  const std::optional<std::filesystem::path> calibration =
-      options.calibration ? options.calibration : dataset.calibration;
-  if (!calibration) {
-    throw InputError(
-        fmt::format("{}: no calibration found beside the dataset; pass one with --calib", options.input.string()));
-  }
-  recording.rig = loadCalibration(*calibration);
   TrackRecorder recorder(recording.frames);
   options.estimate = false;
   options.keep_trajectory = false;
@@ -41,6 +32,7 @@ std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options) {
   const VoRunResult result = runVisualOdometry(options);
   if (result.pipeline.error) throw RuntimeFailure(result.pipeline.error->message);
   if (result.stop_signal != 0) return std::nullopt;
+  recording.rig = result.rig;
   recording.config = result.config;
   recording.description = result.description;
   return recording;

@@ -222,6 +222,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                 const std::string& ground_truth_name) {
   VoRunResult result;
   result.config = config;
+  result.rig = rig;
   if (options.mode) result.config.frontend.prior_mode = *options.mode;
   if (options.bridge_iframes) result.config.frontend.bridge_iframes = *options.bridge_iframes;
   const std::function<bool()> stop_requested = options.pipeline.stop_requested

@@ -64,6 +64,7 @@ struct VoRunResult {
   std::string decoder_description;  // "decoder: software", empty for raw images
   VocaConfig config;                // as used, after --mode
   std::string config_name;          // the file or shipped name the config came from
+  StereoRig rig;                    // the calibration the run used
   bool has_motion = false;          // decoded video: motion vectors available
   int width = 0, height = 0;
   Trajectory trajectory;  // causal, body frame of the calibration (when keep_trajectory)
