@@ -7,9 +7,9 @@ if(CMAKE_CROSSCOMPILING)
 endif()
 voca_add_test(test_backend SOURCES test_backend.cpp LIBS voca_backend voca_synth voca_eval TIMEOUT 120
   ARGS ${backend_test_args})
-voca_add_test(test_backend_config SOURCES test_backend_config.cpp LIBS voca_config LABELS asan)
+voca_add_test(test_backend_config SOURCES test_backend_config.cpp LIBS voca_formats_config LABELS asan)
 target_compile_definitions(test_backend_config PRIVATE VOCA_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 voca_add_test(test_backend_alloc SOURCES test_backend_alloc.cpp LIBS voca_backend voca_synth TIMEOUT 240)
-voca_add_test(test_backend_e2e SOURCES test_backend_e2e.cpp LIBS voca_pipeline_vo voca_eval voca_trajectory LABELS e2e
+voca_add_test(test_backend_e2e SOURCES test_backend_e2e.cpp LIBS voca_pipeline_vo voca_eval voca_formats_trajectory LABELS e2e
               TIMEOUT 900)
 add_dependencies(test_backend_e2e voca)

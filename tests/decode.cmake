@@ -1,8 +1,8 @@
 voca_add_test(test_decode SOURCES test_decode.cpp LIBS voca_drivers_decode voca_drivers_encode)
 voca_add_test(test_decode_bad SOURCES test_decode_bad.cpp LIBS voca_drivers_decode voca_drivers_encode
-              voca_drivers_dataset LABELS asan)
+              voca_formats_dataset LABELS asan)
 voca_add_test(test_decode_e2e SOURCES test_decode_e2e.cpp LIBS voca_drivers_decode voca_drivers_encode
-              voca_drivers_dataset voca_image LABELS e2e TIMEOUT 300)
+              voca_formats_dataset voca_formats_image LABELS e2e TIMEOUT 300)
 # Counting operator new: the per-frame decode path allocates nothing after warm-up (own executable,
 # since it replaces the global allocator).
 voca_add_test(test_decode_alloc SOURCES test_decode_alloc.cpp LIBS voca_drivers_decode voca_drivers_encode)

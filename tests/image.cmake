@@ -1,2 +1,2 @@
 # PNG reading and writing; bad files are checked under AddressSanitizer too.
-voca_add_test(test_image SOURCES test_image.cpp LIBS voca_image PNG::PNG LABELS asan)
+voca_add_test(test_image SOURCES test_image.cpp LIBS voca_formats_image PNG::PNG LABELS asan)

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "voca/config/config.h"
+#include "formats/config/config.h"
 #include "voca/core/error.h"
 
 using namespace voca;

@@ -9,10 +9,10 @@
 #include <fstream>
 #include <string>
 
+#include "formats/trajectory/trajectory_io.h"
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
 #include "voca/eval/evaluate.h"
-#include "voca/trajectory/trajectory.h"
 
 using namespace voca;
 

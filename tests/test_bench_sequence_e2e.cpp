@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
 #include "pipeline/harness/bench_sequence.h"
 #include "tests/test_support.h"
 

@@ -5,10 +5,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "formats/calib/calibration_io.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace {
 

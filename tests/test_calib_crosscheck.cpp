@@ -7,8 +7,8 @@
 #include <cmath>
 #include <vector>
 
+#include "formats/calib/calibration_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 
 namespace {
 

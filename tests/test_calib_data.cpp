@@ -3,8 +3,8 @@
 
 #include <string>
 
+#include "formats/calib/calibration_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/error.h"
 
 namespace {

@@ -4,15 +4,15 @@
 
 #include <doctest/doctest.h>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/demuxer.h"
 #include "drivers/source/dataset_source.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
 #include "pipeline/vo/camera_runner.h"
 #include "platform/filesystem/temp_dir.h"
 #include "tests/fake_v4l2.h"
 #include "tests/test_frontend_support.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/error.h"
 
 using namespace voca;

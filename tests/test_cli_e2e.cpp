@@ -8,12 +8,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/camera/generic_camera.h"
-#include "voca/image/png_io.h"
 #include "voca/trajectory/trajectory.h"
 
 namespace fs = std::filesystem;

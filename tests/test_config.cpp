@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <string>
 
+#include "formats/config/builtin_configs.h"
+#include "formats/config/config.h"
 #include "tests/test_support.h"
-#include "voca/config/builtin_configs.h"
-#include "voca/config/config.h"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-// The one config-section reader (voca/config/config_section.h) on a section of its own: every
+// The one config-section reader (formats/config/config_section.h) on a section of its own: every
 // component's table gets the same errors for unknown keys, wrong types, ranges and choices.
 
 #include <doctest/doctest.h>
@@ -7,8 +7,8 @@
 #include <string>
 #include <string_view>
 
+#include "formats/config/config_section.h"
 #include "voca/config/config_field.h"
-#include "voca/config/config_section.h"
 #include "voca/core/error.h"
 
 namespace {

@@ -4,10 +4,10 @@
 #include <fstream>
 #include <string>
 
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace {
 

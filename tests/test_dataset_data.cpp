@@ -2,9 +2,9 @@
 
 #include <string>
 
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
-#include "voca/image/png_io.h"
 
 TEST_CASE("EuRoC V1_01 micro: 95 stereo frames, the 4 cam1 rows without images warned") {
   const auto root = voca::test::sharedData("euroc_v101_micro");

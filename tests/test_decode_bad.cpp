@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/dataset/dataset.h"
 #include "test_support.h"
 #include "voca/core/error.h"
 

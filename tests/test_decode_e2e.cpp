@@ -9,11 +9,11 @@
 #include <functional>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "test_support.h"
-#include "voca/image/png_io.h"
 
 namespace fs = std::filesystem;
 

@@ -2,13 +2,13 @@
 
 #include <fstream>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 using namespace voca;
 using namespace voca::encode;

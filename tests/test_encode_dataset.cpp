@@ -2,8 +2,8 @@
 
 #include <fstream>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/dataset_encoder.h"
+#include "formats/dataset/dataset.h"
 #include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"

@@ -2,12 +2,12 @@
 
 #include <fstream>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/dataset_encoder.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
-#include "voca/trajectory/trajectory.h"
 
 using namespace voca;
 using namespace voca::encode;

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "formats/eval/eval_report_json.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
 

@@ -3,8 +3,9 @@
 #include <cmath>
 #include <iomanip>
 
+#include "formats/calib/calibration_io.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/eval/evaluate.h"
 
 // Parity with evo on its own test data (../shared/data/evo_reference, values in its SOURCE.txt).

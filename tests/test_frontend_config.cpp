@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "formats/config/config.h"
 #include "tests/test_support.h"
-#include "voca/config/config.h"
 #include "voca/core/error.h"
 
 using namespace voca;

@@ -12,16 +12,17 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/config/config.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
-#include "voca/config/config.h"
 #include "voca/frontend/frontend.h"
 #include "voca/frontend/patch.h"
 #include "voca/frontend/pyramid.h"
-#include "voca/image/png_io.h"
 #include "voca/synth/motion.h"
 #include "voca/synth/renderer.h"
 #include "voca/synth/rigs.h"

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace {
 

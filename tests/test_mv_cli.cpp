@@ -4,8 +4,8 @@
 #include <string>
 
 #include "drivers/decode/demuxer.h"
+#include "formats/image/png_io.h"
 #include "tests/test_support.h"
-#include "voca/image/png_io.h"
 
 namespace fs = std::filesystem;
 

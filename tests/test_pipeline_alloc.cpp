@@ -15,9 +15,10 @@
 #include <functional>
 #include <new>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/video_encoder.h"
 #include "drivers/source/dataset_source.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
 #include "pipeline/runtime/runner.h"
 #include "pipeline/sinks/statistics_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
@@ -27,7 +28,6 @@
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_frontend_support.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 
 // ---- every heap allocation of the process, C and C++, by who asked ---------------------------
 // malloc and friends are interposed here; each call is attributed by its return address to FFmpeg

@@ -16,13 +16,13 @@
 #include <string>
 #include <thread>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/demuxer.h"
 #include "drivers/source/dataset_source.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
-#include "voca/trajectory/trajectory.h"
 
 extern char** environ;
 

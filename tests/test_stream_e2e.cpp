@@ -23,15 +23,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/live_encoder.h"
 #include "drivers/network/frame_stamp.h"
 #include "drivers/source/dataset_source.h"
 #include "drivers/source/network_source.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
 #include "pipeline/stream/stream_runner.h"
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
 
 using namespace voca;
 namespace fs = std::filesystem;

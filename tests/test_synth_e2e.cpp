@@ -4,12 +4,12 @@
 #include <iterator>
 #include <string>
 
-#include "drivers/dataset/dataset.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "tests/test_support.h"
-#include "voca/calib/calibration.h"
-#include "voca/image/png_io.h"
 #include "voca/synth/rigs.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace fs = std::filesystem;
 

@@ -7,8 +7,8 @@
 #include <numbers>
 #include <random>
 
+#include "formats/trajectory/trajectory_io.h"
 #include "tests/test_support.h"
-#include "voca/trajectory/trajectory.h"
 
 using voca::SE3d;
 using voca::TimedPose;

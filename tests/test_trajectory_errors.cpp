@@ -3,9 +3,9 @@
 #include <fstream>
 #include <string>
 
+#include "formats/trajectory/trajectory_io.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
-#include "voca/trajectory/trajectory.h"
 
 // Malformed trajectory files must give an InputError naming the file and line, never a crash.
 

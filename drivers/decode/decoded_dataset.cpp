@@ -4,8 +4,8 @@
 
 #include <fmt/core.h>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
+#include "formats/dataset/dataset.h"
 #include "voca/core/error.h"
 
 namespace voca::decode {

@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_decoder.h"
+#include "formats/dataset/dataset.h"
 
 namespace voca::decode {
 

@@ -12,10 +12,10 @@
 #include <fmt/core.h>
 
 #include "drivers/decode/video_reader.h"
-#include "voca/calib/calibration.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/image/png_io.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace voca::encode {
 

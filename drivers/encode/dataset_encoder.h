@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/dataset/dataset.h"
 
 namespace voca::encode {
 

@@ -4,7 +4,7 @@
 
 #include <exception>
 
-#include "voca/calib/calibration.h"
+#include "formats/calib/calibration_io.h"
 #include "voca/core/error.h"
 
 namespace voca::encode {

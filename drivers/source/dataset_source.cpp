@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "formats/image/png_io.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace voca {
 

@@ -10,9 +10,9 @@
 #include <memory>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/demuxer.h"
 #include "drivers/source/stereo_source.h"
+#include "formats/dataset/dataset.h"
 
 namespace voca {
 

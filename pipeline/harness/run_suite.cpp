@@ -11,12 +11,12 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "pipeline/vo/vo_runner.h"
 #include "pipeline/harness/table_format.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace voca::harness {
 

@@ -6,9 +6,9 @@
 #include <memory>
 #include <optional>
 
+#include "formats/trajectory/trajectory_io.h"
+#include "formats/trajectory/trajectory_writer.h"
 #include "pipeline/sinks/sink_stage.h"
-#include "voca/trajectory/trajectory.h"
-#include "voca/trajectory/trajectory_writer.h"
 
 namespace voca::pipeline {
 

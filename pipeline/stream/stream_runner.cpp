@@ -10,10 +10,10 @@
 
 #include <fmt/core.h>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/network/frame_stamp.h"
 #include "drivers/network/ts_writer.h"
 #include "drivers/source/dataset_source.h"
+#include "formats/dataset/dataset.h"
 #include "platform/realtime/clock.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"

@@ -11,14 +11,14 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
-#include "voca/calib/calibration.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
 #include "voca/synth/renderer.h"
 #include "voca/synth/rigs.h"
 #include "voca/synth/scene.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace voca::pipeline {
 

@@ -7,7 +7,7 @@
 #ifdef VOCA_HAVE_LIBCAMERA
 #include "drivers/capture/libcamera_source.h"
 #endif
-#include "voca/calib/calibration.h"
+#include "formats/calib/calibration_io.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {

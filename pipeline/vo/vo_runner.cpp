@@ -8,11 +8,13 @@
 #include <cmath>
 #include <fstream>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "drivers/source/dataset_source.h"
 #include "drivers/source/network_source.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/dataset/dataset.h"
+#include "formats/eval/eval_report_json.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
 #include "pipeline/stages/decode_stage.h"
@@ -20,7 +22,6 @@
 #include "pipeline/stages/source_stage.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/realtime/stop_signal.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {

@@ -14,15 +14,15 @@
 #include <string>
 #include <vector>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/decoder_kind.h"
 #include "drivers/source/stereo_source.h"
+#include "formats/config/config.h"
+#include "formats/dataset/dataset.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "pipeline/runtime/runner.h"
 #include "pipeline/sinks/sink_stage.h"
 #include "pipeline/sinks/statistics_sink.h"
-#include "voca/config/config.h"
 #include "voca/eval/evaluate.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace voca::pipeline {
 

@@ -1,6 +1,6 @@
 // EuRoC / TUM-VI mav0/camN/data.csv ("<timestamp ns>,<file name>") through openDataset. The input
 // holds cam0's file, then a "--8<--" line and cam1's (or one file used for both).
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

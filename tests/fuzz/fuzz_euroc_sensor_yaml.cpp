@@ -1,7 +1,7 @@
 // EuRoC mav0/camN/sensor.yaml (T_BS, intrinsics, distortion, resolution). The input holds cam0's
 // file, then a "--8<--" line and cam1's (or one file used for both).
+#include "formats/calib/calibration_io.h"
 #include "tests/fuzz/fuzz_support.h"
-#include "voca/calib/calibration.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto [cam0, cam1] = voca::fuzz::splitInput({reinterpret_cast<const char*>(data), size});

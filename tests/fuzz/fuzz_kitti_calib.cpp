@@ -1,8 +1,8 @@
 // KITTI calib.txt (P0..P3 projection rows); the image size comes from image_0/ beside it.
+#include "formats/calib/calibration_io.h"
+#include "formats/image/png_io.h"
 #include "tests/fuzz/fuzz_support.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/image.h"
-#include "voca/image/png_io.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   const voca::GrayImage image(37, 13);  // a KITTI-like odd size; the pixels are not read

@@ -10,8 +10,8 @@
 #include <memory>
 #include <thread>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/dataset/dataset.h"
 #include "pipeline/runtime/chrome_trace.h"
 #include "pipeline/vo/vo_runner.h"
 #include "platform/filesystem/temp_dir.h"

@@ -8,11 +8,12 @@
 #include <optional>
 #include <string>
 
+#include "formats/calib/calibration_io.h"
+#include "formats/eval/eval_report_json.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "tools/voca/command.h"
-#include "voca/calib/calibration.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
-#include "voca/trajectory/trajectory.h"
 
 namespace {
 

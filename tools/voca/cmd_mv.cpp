@@ -13,13 +13,13 @@
 
 #include <fmt/core.h>
 
-#include "drivers/dataset/dataset.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/rgb_video_writer.h"
+#include "formats/dataset/dataset.h"
+#include "formats/image/png_io.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 #include "voca/image/draw.h"
-#include "voca/image/png_io.h"
 #include "voca/motion/motion_field.h"
 
 namespace {

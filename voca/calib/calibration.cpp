@@ -1,38 +1,8 @@
 #include "voca/calib/calibration.h"
 
-#include <Eigen/SVD>
-#include <algorithm>
-#include <sstream>
-
-#include "voca/calib/internal.h"
 #include "voca/core/error.h"
 
 namespace voca {
-namespace fs = std::filesystem;
-
-namespace calib_internal {
-
-std::string rigidTransformProblem(const Eigen::Matrix4d& m) {
-  // Files print matrices with 9-16 digits; 1e-3 accepts any of them and rejects wrong matrices.
-  constexpr double kTolerance = 1e-3;
-  if (!m.allFinite()) return "contains a non-finite value";
-  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kTolerance) {
-    return "bottom row must be 0 0 0 1";
-  }
-  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > kTolerance || r.determinant() < 0.0) {
-    return "rotation block is not a rotation (orthonormal with determinant +1)";
-  }
-  return {};
-}
-
-SE3d toSE3(const Eigen::Matrix4d& m) {
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
-  return SE3d(SO3<double>(r), m.topRightCorner<3, 1>());
-}
-
-}  // namespace calib_internal
 
 SE3d StereoRig::T_cam0_cam1() const {
   if (cameras.size() < 2) {
@@ -40,49 +10,6 @@ SE3d StereoRig::T_cam0_cam1() const {
                      std::to_string(cameras.size()));
   }
   return cameras[0].T_body_cam.inverse() * cameras[1].T_body_cam;
-}
-
-namespace {
-
-std::optional<fs::path> calibrationJsonIn(const fs::path& folder) {
-  std::vector<fs::path> found;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    const fs::path& p = entry.path();
-    if (entry.is_regular_file() && p.extension() == ".json" && p.filename().string().find("calib") != std::string::npos)
-      found.push_back(p);
-  }
-  if (found.empty()) return std::nullopt;
-  return *std::min_element(found.begin(), found.end());
-}
-
-}  // namespace
-
-StereoRig loadCalibration(const fs::path& path) {
-  if (!fs::exists(path)) throw InputError(path.string() + ": calibration not found");
-  if (fs::is_directory(path)) {
-    if (fs::is_regular_file(path / "mav0" / "cam0" / "sensor.yaml")) return loadEurocSensorCalibration(path / "mav0");
-    if (fs::is_regular_file(path / "cam0" / "sensor.yaml")) return loadEurocSensorCalibration(path);
-    if (fs::is_regular_file(path / "calib.txt")) return loadKittiCalibration(path / "calib.txt");
-    if (const auto json = calibrationJsonIn(path)) return loadBasaltCalibration(*json);
-    throw InputError(path.string() +
-                     ": no calibration found in this folder: looked for mav0/cam0/sensor.yaml, cam0/sensor.yaml "
-                     "(EuRoC), calib.txt (KITTI) and *calib*.json (Basalt)");
-  }
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  if (extension == ".json") return loadBasaltCalibration(path);
-  if (extension == ".yaml" || extension == ".yml") {
-    // A EuRoC camN/sensor.yaml describes one camera; the rig is the mav0 folder above it.
-    if (path.filename() == "sensor.yaml")
-      return loadEurocSensorCalibration(fs::absolute(path).parent_path().parent_path());
-    return loadKalibrCalibration(path);
-  }
-  if (extension == ".txt") return loadKittiCalibration(path);
-  throw InputError(path.string() +
-                   ": unknown calibration format: expected a Basalt .json, a Kalibr camchain .yaml, a KITTI "
-                   "calib.txt, or a dataset folder");
 }
 
 }  // namespace voca

@@ -5,8 +5,6 @@
 #include <optional>
 #include <string_view>
 
-#include <nlohmann/json_fwd.hpp>
-
 #include "voca/eval/association.h"
 #include "voca/eval/metrics.h"
 #include "voca/trajectory/trajectory.h"
@@ -53,8 +51,5 @@ Trajectory convertPoseFrame(const Trajectory& trajectory, PoseFrame from, PoseFr
 
 // Associates, aligns and measures. Both trajectories must be in the same body frame already.
 EvalReport evaluateTrajectory(const Trajectory& est, const Trajectory& gt, const EvalOptions& options = {});
-
-// The report as JSON (statistics in metres, verdicts as "ok" / "divergent" / "R").
-nlohmann::json evalReportToJson(const EvalReport& report, const EvalOptions& options);
 
 }  // namespace voca

@@ -1,4 +1,4 @@
-#include "voca/image/png_io.h"
+#include "formats/image/png_io.h"
 
 #include <png.h>
 

@@ -1,12 +1,13 @@
-#include "drivers/dataset/dataset.h"
+#include "formats/dataset/dataset.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <unordered_map>
 
+#include "formats/calib/calibration_io.h"
+#include "formats/image/png_io.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace voca {
 namespace fs = std::filesystem;
@@ -92,23 +93,6 @@ std::string examples(const std::vector<std::string>& items) {
   for (size_t i = 0; i < items.size() && i < kWarningExamples; ++i) out += (i == 0 ? "" : ", ") + items[i];
   if (items.size() > kWarningExamples) out += ", ...";
   return out;
-}
-
-// A Basalt calibration placed beside the dataset: the first *.json with "calib" in its name.
-std::optional<fs::path> findCalibrationJson(const std::vector<fs::path>& folders) {
-  for (const fs::path& folder : folders) {
-    std::vector<fs::path> found;
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(folder, ec)) {
-      const fs::path& p = entry.path();
-      if (entry.is_regular_file() && p.extension() == ".json" &&
-          p.filename().string().find("calib") != std::string::npos)
-        found.push_back(p);
-    }
-    std::sort(found.begin(), found.end());
-    if (!found.empty()) return found.front();
-  }
-  return std::nullopt;
 }
 
 void readEuroc(const fs::path& mav0, Dataset& dataset) {
@@ -297,7 +281,10 @@ Dataset openDataset(const fs::path& path) {
   if (fs::is_regular_file(ground_truth)) dataset.ground_truth = ground_truth;
   std::vector<fs::path> beside = {root};
   if (mav0 == root) beside.push_back(root.parent_path());
-  dataset.calibration = findCalibrationJson(beside);
+  for (const fs::path& folder : beside) {
+    dataset.calibration = findCalibrationJson(folder);
+    if (dataset.calibration) break;
+  }
   if (!dataset.calibration && fs::is_regular_file(mav0 / "cam0" / "sensor.yaml")) dataset.calibration = mav0;
   return dataset;
 }

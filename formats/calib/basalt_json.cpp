@@ -4,8 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "voca/calib/calibration.h"
-#include "voca/calib/internal.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/calib/internal.h"
 #include "voca/core/error.h"
 
 namespace voca {

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "voca/trajectory/trajectory.h"
+#include "formats/trajectory/trajectory_io.h"
 
 namespace voca {
 

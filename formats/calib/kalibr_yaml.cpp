@@ -7,8 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "voca/calib/calibration.h"
-#include "voca/calib/internal.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/calib/internal.h"
 #include "voca/core/error.h"
 
 namespace voca {

@@ -1,4 +1,4 @@
-#include "voca/config/config.h"
+#include "formats/config/config.h"
 
 #include <fmt/core.h>
 
@@ -7,9 +7,9 @@
 #include <sstream>
 #include <string_view>
 
+#include "formats/config/builtin_configs.h"
+#include "formats/config/config_section.h"
 #include "voca/backend/backend_config_fields.h"
-#include "voca/config/builtin_configs.h"
-#include "voca/config/config_section.h"
 #include "voca/core/error.h"
 
 namespace voca {

@@ -1,4 +1,4 @@
-#include "voca/trajectory/trajectory_writer.h"
+#include "formats/trajectory/trajectory_writer.h"
 
 #include <fmt/format.h>
 

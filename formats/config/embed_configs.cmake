@@ -11,8 +11,8 @@ foreach(file ${config_files})
   string(APPEND entries "    {\"${name}\", R\"voca_json(${text})voca_json\"},\n")
 endforeach()
 file(WRITE ${OUTPUT}.tmp
-  "// Generated from configs/*_vo.json by voca/config/embed_configs.cmake; do not edit.\n"
-  "#include \"voca/config/builtin_configs.h\"\n\n"
+  "// Generated from configs/*_vo.json by formats/config/embed_configs.cmake; do not edit.\n"
+  "#include \"formats/config/builtin_configs.h\"\n\n"
   "namespace voca {\n\n"
   "std::span<const BuiltinConfig> builtinConfigs() {\n"
   "  static constexpr BuiltinConfig kConfigs[] = {\n${entries}  };\n"

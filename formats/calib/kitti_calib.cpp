@@ -5,9 +5,9 @@
 #include <map>
 #include <sstream>
 
-#include "voca/calib/calibration.h"
+#include "formats/calib/calibration_io.h"
+#include "formats/image/png_io.h"
 #include "voca/core/error.h"
-#include "voca/image/png_io.h"
 
 namespace voca {
 namespace fs = std::filesystem;
