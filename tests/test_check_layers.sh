@@ -8,9 +8,11 @@ tree=$(mktemp -d)
 trap 'rm -rf "$tree"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-mkdir -p "$tree"/{voca/frontend,drivers/decode,pipeline/vo,platform/realtime,tools/voca}
+mkdir -p "$tree"/{voca/frontend,formats/calib,drivers/decode,pipeline/vo,platform/realtime,tools/voca}
 printf '#include "voca/core/image.h"\n#include <vector>\n' >"$tree/voca/frontend/ok.cpp"
-printf '#include "voca/core/image.h"\n#include "platform/realtime/clock.h"\n' >"$tree/drivers/decode/ok.cpp"
+printf '#include "voca/calib/calibration.h"\n#include <nlohmann/json.hpp>\n' >"$tree/formats/calib/ok.cpp"
+printf '#include "voca/core/image.h"\n#include "formats/calib/ok.h"\n#include "platform/realtime/clock.h"\n' \
+  >"$tree/drivers/decode/ok.cpp"
 printf '#include "drivers/decode/ok.h"\n#include "voca/frontend/ok.h"\n' >"$tree/pipeline/vo/ok.cpp"
 printf '#include "pipeline/vo/ok.h"\n' >"$tree/tools/voca/ok.cpp"
 bash "$check" "$tree" >/dev/null || fail "a clean tree was rejected"
@@ -27,6 +29,10 @@ expect_violation voca/frontend/bad.cpp '#include "drivers/decode/video_decoder.h
 expect_violation voca/frontend/bad.h '  #  include <pipeline/runtime/stage.h>' "voca/ must not include"
 expect_violation voca/frontend/bad.cpp '#include "tools/voca/command.h"' "voca/ must not include"
 expect_violation voca/frontend/bad.cpp '#include "platform/realtime/clock.h"' "voca/ must not include"
+expect_violation voca/frontend/bad.cpp '#include "formats/calib/calibration_io.h"' "voca/ must not include"
+expect_violation formats/calib/bad.cpp '#include "drivers/decode/video_decoder.h"' "formats/ must not include"
+expect_violation formats/calib/bad.h '#include <pipeline/vo/vo_runner.h>' "formats/ must not include"
+expect_violation formats/calib/bad.cpp '#include "tools/voca/command.h"' "formats/ must not include"
 expect_violation drivers/decode/bad.cpp '#include "pipeline/vo/vo_runner.h"' "drivers/ must not include"
 expect_violation drivers/decode/bad.cpp '#include "tools/voca/command.h"' "drivers/ must not include"
 expect_violation pipeline/vo/bad.cpp '#include "tools/voca/pipeline_cli.h"' "pipeline/ must not include"
@@ -36,4 +42,4 @@ bash "$check" "$tree" >/dev/null || fail "the tree is not clean again after the 
 rc=0
 bash "$check" "$tree/nonexistent" >/dev/null 2>&1 || rc=$?
 [[ $rc -eq 2 ]] || fail "a missing root gave exit $rc, expected 2"
-echo "check_layers.sh: clean tree passes, 8 kinds of cross-layer include fail"
+echo "check_layers.sh: clean tree passes, 12 kinds of cross-layer include fail"

@@ -2,7 +2,9 @@
 # Checks that the layers include only downwards (README: folders are the data flow). Every target
 # gets the project root as include path, so the compiler cannot stop voca/ from including a driver
 # by accident; this check does. The rules (a layer must not include the folders listed after it):
-#   voca/     -> drivers/ pipeline/ tools/ platform/   (pure algorithms: no devices, threads, OS)
+#   voca/     -> formats/ drivers/ pipeline/ tools/ platform/   (pure algorithms: no files, devices,
+#                                                              threads, OS)
+#   formats/  -> drivers/ pipeline/ tools/   (file readers and writers on top of voca/'s types)
 #   drivers/  -> pipeline/ tools/
 #   pipeline/ -> tools/
 #   platform/ -> drivers/ pipeline/ tools/
@@ -18,7 +20,8 @@ if [[ $# -gt 1 || ! -d "$root" ]]; then
 fi
 cd "$root"
 
-rules=("voca:drivers pipeline tools platform"
+rules=("voca:formats drivers pipeline tools platform"
+       "formats:drivers pipeline tools"
        "drivers:pipeline tools"
        "pipeline:tools"
        "platform:drivers pipeline tools")
@@ -44,7 +47,7 @@ for rule in "${rules[@]}"; do
 done
 
 if [[ $checked -eq 0 ]]; then
-  echo "$0: no sources found under $(pwd) (expected voca/, drivers/, pipeline/ or platform/)" >&2
+  echo "$0: no sources found under $(pwd) (expected voca/, formats/, drivers/, pipeline/ or platform/)" >&2
   exit 2
 fi
 if [[ $violations -gt 0 ]]; then
