@@ -4,15 +4,17 @@
 # and compares the sha256 of every trajectory file; prints the hashes and exits non-zero on any
 # difference.
 #
-#   tools/check_identical.sh <voca-A> <voca-B> [--euroc <mav0 folder>] [--kitti <sequence folder>]
+#   tools/check_identical.sh <voca-A> <voca-B> [--euroc <EuRoC folder>] [--kitti <sequence folder>]
 #
 # Always: a synthetic aggressive sequence (generated and encoded once with binary A) run with
-# --mode none and --mode mv_parallel_of. Optional: an EuRoC mav0 folder encoded on the fly at 500k
-# (calibration from its camN/sensor.yaml) and a KITTI odometry sequence folder.
+# --mode none and --mode mv_parallel_of. Optional: an EuRoC folder (calibration from its
+# camN/sensor.yaml) and a KITTI odometry sequence folder (calib.txt, --config kitti), each run on its
+# raw images and encoded on the fly at 500k; with the KITTI ground truth beside it
+# (../../poses/<sequence>.txt), also the `voca eval --json` report of the 500k trajectory.
 set -euo pipefail
 
 usage() {
-  echo "usage: $0 <voca-A> <voca-B> [--euroc <mav0 folder>] [--kitti <sequence folder>]" >&2
+  echo "usage: $0 <voca-A> <voca-B> [--euroc <EuRoC folder>] [--kitti <sequence folder>]" >&2
   exit 2
 }
 [[ $# -ge 2 ]] || usage
@@ -43,8 +45,8 @@ echo "inputs: synthetic aggressive sequence (6 s), encoded at 500k" >&2
 # name and arguments of each run; the trajectory goes to <label>/<name>.txt
 runs=("synth_none|run s500 --mode none"
       "synth_mv_parallel_of|run s500 --mode mv_parallel_of")
-[[ -n "$euroc" ]] && runs+=("euroc_500k|run $euroc --encode 500k")
-[[ -n "$kitti" ]] && runs+=("kitti|run $kitti")
+[[ -n "$euroc" ]] && runs+=("euroc_raw|run $euroc" "euroc_500k|run $euroc --encode 500k")
+[[ -n "$kitti" ]] && runs+=("kitti_raw|run $kitti --config kitti" "kitti_500k|run $kitti --config kitti --encode 500k")
 
 status=0
 for run in "${runs[@]}"; do
@@ -68,4 +70,26 @@ for run in "${runs[@]}"; do
     status=1
   fi
 done
+
+# The evaluation report reads the calibration, both trajectories and the times file and writes JSON.
+ground_truth=${kitti:+$(dirname "$(dirname "$kitti")")/poses/$(basename "$kitti").txt}
+if [[ -n "$kitti" && -f "$ground_truth" && -f a/kitti_500k.txt ]]; then
+  for label in a b; do
+    binary=$voca_a
+    [[ $label == b ]] && binary=$voca_b
+    "$binary" eval --gt "$ground_truth" --gt-times "$kitti/times.txt" --est a/kitti_500k.txt --calib "$kitti" \
+      --json "$label/kitti_eval.json" >"$label/kitti_eval.log" 2>&1 ||
+      { echo "kitti_eval: voca ($label) failed:" >&2; tail -5 "$label/kitti_eval.log" >&2; status=1; }
+  done
+  if [[ -f a/kitti_eval.json && -f b/kitti_eval.json ]]; then
+    hash_a=$(sha256sum a/kitti_eval.json | cut -d' ' -f1)
+    hash_b=$(sha256sum b/kitti_eval.json | cut -d' ' -f1)
+    if [[ "$hash_a" == "$hash_b" ]]; then
+      echo "identical  kitti_eval_json  $hash_a"
+    else
+      echo "DIFFERENT  kitti_eval_json  A $hash_a  B $hash_b"
+      status=1
+    fi
+  fi
+fi
 exit $status
