@@ -206,6 +206,28 @@ void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, c
   }
 }
 
+void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
+                          float margin, int num_levels) {
+  constexpr int kLineFloats = 64 / static_cast<int>(sizeof(float));  // a typical cache line
+  for (int level = 0; level < std::min(num_levels, pyramid.numLevels()); ++level) {
+    const FloatView image = pyramid.level(level);
+    const float scale = 1.f / static_cast<float>(1 << level);
+    // The bilinear cells and gradient neighbourhoods reach one pixel before and two after a point.
+    const float reach = pattern.max_norm + margin * scale;
+    const float x = px.x() * scale, y = px.y() * scale;
+    if (!(std::abs(x) < 1e6f && std::abs(y) < 1e6f)) return;  // not finite or absurd: nothing to fetch
+    const int x0 = std::clamp(static_cast<int>(std::floor(x - reach)) - 1, 0, image.width - 1);
+    const int x1 = std::clamp(static_cast<int>(std::ceil(x + reach)) + 2, 0, image.width - 1);
+    const int y0 = std::clamp(static_cast<int>(std::floor(y - reach)) - 1, 0, image.height - 1);
+    const int y1 = std::clamp(static_cast<int>(std::ceil(y + reach)) + 2, 0, image.height - 1);
+    for (int row = y0; row <= y1; ++row) {
+      const float* line = image.data + static_cast<std::ptrdiff_t>(row) * image.stride;
+      for (int col = x0; col <= x1; col += kLineFloats) __builtin_prefetch(line + col);
+      __builtin_prefetch(line + x1);
+    }
+  }
+}
+
 AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
                        const AlignParams& params, SE2f& T) {
   for (int level = static_cast<int>(from.size()) - 1; level >= 0; --level) {
