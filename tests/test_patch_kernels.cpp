@@ -252,6 +252,34 @@ TEST_CASE("patch kernels: masked warped sampling, native == portable == per-poin
   CHECK(partial > 50);
 }
 
+TEST_CASE("patch kernels: template normalisation, native == portable == the per-point formula") {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> unit(0.f, 1.f), grad(-50.f, 50.f);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::array<float, PatchPattern::kMaxSize> value, jpix[3], n_jac[3], p_jac[3];
+    for (std::size_t k = 0; k < value.size(); ++k) {
+      value[k] = unit(rng) < 0.15f ? -1.f : 255.f * unit(rng);  // -1 marks an invalid point
+      for (auto& row : jpix) row[k] = grad(rng);
+    }
+    const float jsum[3] = {grad(rng), grad(rng), grad(rng)};
+    const float inv_mean = 1.f / (50.f + 100.f * unit(rng));
+    std::array<float, PatchPattern::kMaxSize> n_value = value, p_value = value;
+    kernels::normaliseTemplate<simd4::Native>(52, inv_mean, jsum, n_value.data(), jpix, n_jac);
+    kernels::normaliseTemplate<simd4::Portable>(52, inv_mean, jsum, p_value.data(), jpix, p_jac);
+    for (std::size_t k = 0; k < 52; ++k) {
+      const bool ok = value[k] >= 0.f;
+      const float expected = ok ? value[k] * inv_mean : -1.f;
+      CHECK(sameBits(n_value[k], expected));
+      CHECK(sameBits(p_value[k], expected));
+      for (int c = 0; c < 3; ++c) {
+        const float expected_jac = ok ? (jpix[c][k] - expected * jsum[c]) * inv_mean : 0.f;
+        CHECK(sameBits(n_jac[c][k], expected_jac));
+        CHECK(sameBits(p_jac[c][k], expected_jac));
+      }
+    }
+  }
+}
+
 TEST_CASE("simd4: comparisons, select and lane bits agree with the portable backend") {
   using N = simd4::Native;
   using P = simd4::Portable;

@@ -94,12 +94,7 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     jsum[c] = patch_kernels::sum<simd4::Native>(jpix[c].data(), n) / static_cast<float>(count);
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const bool ok = value[k] >= 0.f;
-    value[k] = ok ? value[k] * inv_mean : -1.f;
-    for (int c = 0; c < 3; ++c) jac[c][k] = ok ? (jpix[c][k] - value[k] * jsum[c]) * inv_mean : 0.f;
-  }
+  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac);
   // H = J^T J from six float dot products over contiguous arrays.
   float h[3][3];
   for (int a = 0; a < 3; ++a)

@@ -228,6 +228,27 @@ std::uint64_t sampleWarpedMasked(const FloatView& image, const PatchPattern& pat
   return sampled;
 }
 
+// The template's mean normalisation, point by point: value_i <- value_i * inv_mean and
+// jac[c]_i = (jpix[c]_i - value_i * jsum[c]) * inv_mean for valid points (value >= 0); invalid ones
+// keep -1 and get zero rows.
+template <class V>
+void normaliseTemplate(int n, float inv_mean, const float* jsum, float* value,
+                       const std::array<float, PatchPattern::kMaxSize>* jpix,
+                       std::array<float, PatchPattern::kMaxSize>* jac) {
+  using F = typename V::F;
+  const F inv = V::set1(inv_mean), zero = V::set1(0.f), invalid = V::set1(-1.f);
+  const F sum0 = V::set1(jsum[0]), sum1 = V::set1(jsum[1]), sum2 = V::set1(jsum[2]);
+  for (int i = 0; i < n; i += 4) {
+    const F raw = V::load(value + i);
+    const typename V::M ok = V::lessEqual(zero, raw);
+    const F v = V::mul(raw, inv);
+    V::store(value + i, V::select(ok, v, invalid));
+    V::store(jac[0].data() + i, V::select(ok, V::mul(V::sub(V::load(jpix[0].data() + i), V::mul(v, sum0)), inv), zero));
+    V::store(jac[1].data() + i, V::select(ok, V::mul(V::sub(V::load(jpix[1].data() + i), V::mul(v, sum1)), inv), zero));
+    V::store(jac[2].data() + i, V::select(ok, V::mul(V::sub(V::load(jpix[2].data() + i), V::mul(v, sum2)), inv), zero));
+  }
+}
+
 // sum_i a_i b_i over n points.
 template <class V>
 float dot(const float* a, const float* b, int n) {
