@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -167,6 +168,136 @@ TEST_CASE("patch kernels: warped sampling and fused dot products, native == port
                      n_sum));
     }
   }
+}
+
+TEST_CASE("patch kernels: masked template sampling, native == portable == per-point sampleWithGradient") {
+  // Centres from outside the image to past its far border, so patches are cut by every edge.
+  const FloatImage image = randomImage(64, 48, 21);
+  const FloatView view = image.view();
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> px(-6.f, 70.f), py(-6.f, 54.f);
+  int partial = 0;
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      const float cx = px(rng), cy = py(rng);
+      std::array<float, PatchPattern::kMaxSize> nv, ntx, nty, nth, pv, ptx, pty, pth;
+      const std::uint64_t n_mask = kernels::sampleTemplateMasked<simd4::Native>(view, *pattern, cx, cy, nv.data(),
+                                                                                ntx.data(), nty.data(), nth.data());
+      const std::uint64_t p_mask = kernels::sampleTemplateMasked<simd4::Portable>(view, *pattern, cx, cy, pv.data(),
+                                                                                  ptx.data(), pty.data(), pth.data());
+      CHECK(n_mask == p_mask);
+      int inside = 0;
+      for (int i = 0; i < pattern->size; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        CHECK(sameBits(nv[k], pv[k]));
+        CHECK(sameBits(ntx[k], ptx[k]));
+        CHECK(sameBits(nty[k], pty[k]));
+        CHECK(sameBits(nth[k], pth[k]));
+        // Bit for bit what the per-point sampler gives, with the same validity test.
+        const float x = cx + pattern->x[k], y = cy + pattern->y[k];
+        const bool ok = canSample(view, x, y);
+        CHECK(((n_mask >> i) & 1u) == (ok ? 1u : 0u));
+        if (!ok) {
+          CHECK(nv[k] == -1.f);
+          CHECK((ntx[k] == 0.f && nty[k] == 0.f && nth[k] == 0.f));
+          continue;
+        }
+        ++inside;
+        const Eigen::Vector3f ref = sampleWithGradient(view, x, y);
+        CHECK(sameBits(nv[k], ref[0]));
+        CHECK(sameBits(ntx[k], ref[1]));
+        CHECK(sameBits(nty[k], ref[2]));
+        CHECK(sameBits(nth[k], -ref[1] * pattern->y[k] + ref[2] * pattern->x[k]));
+      }
+      partial += inside > 0 && inside < pattern->size;
+    }
+  }
+  CHECK(partial > 50);  // the trials do cut patches at the border
+}
+
+TEST_CASE("patch kernels: masked warped sampling, native == portable == per-point sampleBilinear") {
+  const FloatImage image = randomImage(64, 48, 8);
+  const FloatView view = image.view();
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> px(-6.f, 70.f), py(-6.f, 54.f), angle(-0.8f, 0.8f), unit(0.f, 1.f);
+  int partial = 0;
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    const int n = pattern->size;
+    for (int trial = 0; trial < 300; ++trial) {
+      const float theta = angle(rng), c = std::cos(theta), s = std::sin(theta);
+      const float tx = px(rng), ty = py(rng);
+      // Template values, some marked invalid (-1) as PatchTemplate does.
+      std::array<float, PatchPattern::kMaxSize> keep;
+      for (float& v : keep) v = unit(rng) < 0.2f ? -1.f : 0.5f + unit(rng);
+      std::array<float, PatchPattern::kMaxSize> n_out, p_out;
+      const std::uint64_t n_mask =
+          kernels::sampleWarpedMasked<simd4::Native>(view, *pattern, n, c, s, tx, ty, keep.data(), n_out.data());
+      const std::uint64_t p_mask =
+          kernels::sampleWarpedMasked<simd4::Portable>(view, *pattern, n, c, s, tx, ty, keep.data(), p_out.data());
+      CHECK(n_mask == p_mask);
+      int sampled = 0;
+      for (int i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        CHECK(sameBits(n_out[k], p_out[k]));
+        const float x = c * pattern->x[k] - s * pattern->y[k] + tx;
+        const float y = s * pattern->x[k] + c * pattern->y[k] + ty;
+        const bool ok = keep[k] >= 0.f && canSample(view, x, y);
+        CHECK(((n_mask >> i) & 1u) == (ok ? 1u : 0u));
+        CHECK(sameBits(n_out[k], ok ? sampleBilinear(view, x, y) : -1.f));
+        sampled += ok;
+      }
+      partial += sampled > 0 && sampled < n;
+    }
+  }
+  CHECK(partial > 50);
+}
+
+TEST_CASE("patch kernels: template normalisation, native == portable == the per-point formula") {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> unit(0.f, 1.f), grad(-50.f, 50.f);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::array<float, PatchPattern::kMaxSize> value, jpix[3], n_jac[3], p_jac[3];
+    for (std::size_t k = 0; k < value.size(); ++k) {
+      value[k] = unit(rng) < 0.15f ? -1.f : 255.f * unit(rng);  // -1 marks an invalid point
+      for (auto& row : jpix) row[k] = grad(rng);
+    }
+    const float jsum[3] = {grad(rng), grad(rng), grad(rng)};
+    const float inv_mean = 1.f / (50.f + 100.f * unit(rng));
+    std::array<float, PatchPattern::kMaxSize> n_value = value, p_value = value;
+    kernels::normaliseTemplate<simd4::Native>(52, inv_mean, jsum, n_value.data(), jpix, n_jac);
+    kernels::normaliseTemplate<simd4::Portable>(52, inv_mean, jsum, p_value.data(), jpix, p_jac);
+    for (std::size_t k = 0; k < 52; ++k) {
+      const bool ok = value[k] >= 0.f;
+      const float expected = ok ? value[k] * inv_mean : -1.f;
+      CHECK(sameBits(n_value[k], expected));
+      CHECK(sameBits(p_value[k], expected));
+      for (int c = 0; c < 3; ++c) {
+        const float expected_jac = ok ? (jpix[c][k] - expected * jsum[c]) * inv_mean : 0.f;
+        CHECK(sameBits(n_jac[c][k], expected_jac));
+        CHECK(sameBits(p_jac[c][k], expected_jac));
+      }
+    }
+  }
+}
+
+TEST_CASE("simd4: comparisons, select and lane bits agree with the portable backend") {
+  using N = simd4::Native;
+  using P = simd4::Portable;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float a[4] = {1.f, 2.f, nan, -3.f}, b[4] = {2.f, 2.f, 0.f, -4.f};
+  const float x[4] = {10.f, 20.f, 30.f, 40.f}, y[4] = {-1.f, -2.f, -3.f, -4.f};
+  // a < b: lane 0 only; a <= b: lanes 0 and 1; NaN compares false.
+  CHECK(N::bits(N::lessThan(N::load(a), N::load(b))) == 0b0001u);
+  CHECK(N::bits(N::lessEqual(N::load(a), N::load(b))) == 0b0011u);
+  CHECK(P::bits(P::lessThan(P::load(a), P::load(b))) == 0b0001u);
+  CHECK(P::bits(P::lessEqual(P::load(a), P::load(b))) == 0b0011u);
+  CHECK(N::bits(N::both(N::lessEqual(N::load(a), N::load(b)), N::lessThan(N::load(b), N::load(a)))) == 0u);
+  CHECK(N::bits(N::lessEqual(N::load(b), N::load(a))) == 0b1010u);
+  float out[4];
+  N::store(out, N::select(N::lessEqual(N::load(a), N::load(b)), N::load(x), N::load(y)));
+  CHECK((out[0] == 10.f && out[1] == 20.f && out[2] == -3.f && out[3] == -4.f));
+  P::store(out, P::select(P::lessEqual(P::load(a), P::load(b)), P::load(x), P::load(y)));
+  CHECK((out[0] == 10.f && out[1] == 20.f && out[2] == -3.f && out[3] == -4.f));
 }
 
 TEST_CASE("patch kernels: dot and sum, native == portable, against a double reference") {

@@ -25,6 +25,10 @@ void FrontendStats::clear() {
 
 namespace {
 
+// How far from a point's previous position its patches are fetched ahead (level-0 pixels): most
+// tracks move less than this per frame.
+constexpr float kPrefetchMarginPx = 2.f;
+
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -191,6 +195,12 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
+    if (i + 1 < cam.points.size()) {
+      // The next point's patches in both images, fetched while this one is tracked: the pyramids
+      // are larger than the cache and each patch is touched once per frame.
+      prefetchPyramidPatch(to, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
+      prefetchPyramidPatch(from, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
+    }
     const MotionBlock* block = nullptr;
     if (field != nullptr)
       block = field->blockAt(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));

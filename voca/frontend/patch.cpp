@@ -4,6 +4,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace voca {
@@ -30,6 +31,16 @@ PatchPattern makePattern(std::initializer_list<std::pair<int, int>> rows) {
 // canSample): a patch whose points lie within that reach needs no per-point test.
 bool squareInside(const FloatView& image, float x, float y, float reach) {
   return canSample(image, x - reach, y - reach) && canSample(image, x + reach, y + reach);
+}
+
+// The sum of the sampled points' values, added one point after the other (the order the per-point
+// samplers used, which the results depend on bit for bit).
+float sumInPointOrder(const std::array<float, PatchPattern::kMaxSize>& values, std::uint64_t sampled, int n) {
+  float sum = 0.f;
+  for (int i = 0; i < n; ++i) {
+    if (((sampled >> i) & 1u) != 0) sum += values[static_cast<std::size_t>(i)];
+  }
+  return sum;
 }
 
 }  // namespace
@@ -68,23 +79,11 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
                                                        jpix[0].data(), jpix[1].data(), jpix[2].data());
     count = n;
   } else {
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const float x = center.x() + pattern.x[k], y = center.y() + pattern.y[k];
-      if (!canSample(image, x, y)) {
-        value[k] = -1.f;
-        jpix[0][k] = jpix[1][k] = jpix[2][k] = 0.f;
-        continue;
-      }
-      const Eigen::Vector3f vg = sampleWithGradient(image, x, y);
-      value[k] = vg[0];
-      // d I(center + R(theta) q + t) / d (tx, ty, theta) at identity: (gx, gy, -gx qy + gy qx).
-      jpix[0][k] = vg[1];
-      jpix[1][k] = vg[2];
-      jpix[2][k] = -vg[1] * pattern.y[k] + vg[2] * pattern.x[k];
-      sum += vg[0];
-      ++count;
-    }
+    // Near the border every point gets its own weights and its own test.
+    const std::uint64_t sampled = patch_kernels::sampleTemplateMasked<simd4::Native>(
+        image, pattern, center.x(), center.y(), value.data(), jpix[0].data(), jpix[1].data(), jpix[2].data());
+    sum = sumInPointOrder(value, sampled, n);
+    count = std::popcount(sampled);
   }
   all_points_valid = count == n;
   if (2 * count <= n || !(sum > 1e-3f * static_cast<float>(count))) return;
@@ -95,12 +94,7 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     jsum[c] = patch_kernels::sum<simd4::Native>(jpix[c].data(), n) / static_cast<float>(count);
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const bool ok = value[k] >= 0.f;
-    value[k] = ok ? value[k] * inv_mean : -1.f;
-    for (int c = 0; c < 3; ++c) jac[c][k] = ok ? (jpix[c][k] - value[k] * jsum[c]) * inv_mean : 0.f;
-  }
+  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac);
   // H = J^T J from six float dot products over contiguous arrays.
   float h[3][3];
   for (int a = 0; a < 3; ++a)
@@ -151,18 +145,10 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
     }
     return count;
   }
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const float x = c * pattern.x[k] - s * pattern.y[k] + tx;
-    const float y = s * pattern.x[k] + c * pattern.y[k] + ty;
-    if (tmpl.value[k] >= 0.f && canSample(target, x, y)) {
-      residual[k] = sampleBilinear(target, x, y);
-      sum += residual[k];
-      ++count;
-    } else {
-      residual[k] = -1.f;
-    }
-  }
+  const std::uint64_t sampled = patch_kernels::sampleWarpedMasked<simd4::Native>(target, pattern, n, c, s, tx, ty,
+                                                                                 tmpl.value.data(), residual.data());
+  sum = sumInPointOrder(residual, sampled, n);
+  count = std::popcount(sampled);
   if (count == 0 || !(sum > 1e-3f * static_cast<float>(count))) return 0;
   const float inv_mean = static_cast<float>(count) / sum;
   for (int i = 0; i < n; ++i) {
@@ -212,6 +198,28 @@ void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, c
                        std::span<PatchTemplate> levels) {
   for (std::size_t level = 0; level < levels.size(); ++level) {
     levels[level].build(pyramid.level(static_cast<int>(level)), px / static_cast<float>(1 << level), pattern);
+  }
+}
+
+void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
+                          float margin, int num_levels) {
+  constexpr int kLineFloats = 64 / static_cast<int>(sizeof(float));  // a typical cache line
+  for (int level = 0; level < std::min(num_levels, pyramid.numLevels()); ++level) {
+    const FloatView image = pyramid.level(level);
+    const float scale = 1.f / static_cast<float>(1 << level);
+    // The bilinear cells and gradient neighbourhoods reach one pixel before and two after a point.
+    const float reach = pattern.max_norm + margin * scale;
+    const float x = px.x() * scale, y = px.y() * scale;
+    if (!(std::abs(x) < 1e6f && std::abs(y) < 1e6f)) return;  // not finite or absurd: nothing to fetch
+    const int x0 = std::clamp(static_cast<int>(std::floor(x - reach)) - 1, 0, image.width - 1);
+    const int x1 = std::clamp(static_cast<int>(std::ceil(x + reach)) + 2, 0, image.width - 1);
+    const int y0 = std::clamp(static_cast<int>(std::floor(y - reach)) - 1, 0, image.height - 1);
+    const int y1 = std::clamp(static_cast<int>(std::ceil(y + reach)) + 2, 0, image.height - 1);
+    for (int row = y0; row <= y1; ++row) {
+      const float* line = image.data + static_cast<std::ptrdiff_t>(row) * image.stride;
+      for (int col = x0; col <= x1; col += kLineFloats) __builtin_prefetch(line + col);
+      __builtin_prefetch(line + x1);
+    }
   }
 }
 

@@ -110,6 +110,13 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
 void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
                        std::span<PatchTemplate> levels);
 
+// Asks the memory system for the pixels that patches near px (level-0 pixels, within `margin` level-0
+// pixels of it) read on levels 0 .. num_levels-1 of the pyramid, without waiting for them. Purely a
+// speed hint: tracking reads scattered patches of images larger than the cache, and a patch fetched
+// while the previous point is being tracked is not waited for. Changes no result.
+void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
+                          float margin, int num_levels);
+
 // Coarse-to-fine alignment of prebuilt templates into pyramid `to`: T is initialised by the caller
 // (translation = guessed level-0 position, rotation usually identity) and holds the converged warp in
 // level-0 pixels on success. A coarse level whose template is invalid (no texture or too close to the

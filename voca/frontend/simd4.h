@@ -26,6 +26,10 @@ struct Portable {
   struct F {
     float v[4];
   };
+  // A lane mask: the outcome of a comparison per lane.
+  struct M {
+    bool v[4];
+  };
 
   static F load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
   static void store(float* p, F a) { std::memcpy(p, a.v, sizeof(a.v)); }
@@ -44,6 +48,19 @@ struct Portable {
   }
   // ((a0 + a1) + (a2 + a3)), the order the native backends use.
   static float sum(F a) { return (a.v[0] + a.v[1]) + (a.v[2] + a.v[3]); }
+  // Ordered comparisons: false when either side is NaN, as in scalar C++.
+  static M lessThan(F a, F b) { return {{a.v[0] < b.v[0], a.v[1] < b.v[1], a.v[2] < b.v[2], a.v[3] < b.v[3]}}; }
+  static M lessEqual(F a, F b) { return {{a.v[0] <= b.v[0], a.v[1] <= b.v[1], a.v[2] <= b.v[2], a.v[3] <= b.v[3]}}; }
+  static M both(M a, M b) { return {{a.v[0] && b.v[0], a.v[1] && b.v[1], a.v[2] && b.v[2], a.v[3] && b.v[3]}}; }
+  // Lane k of a where the mask is set, of b elsewhere.
+  static F select(M m, F a, F b) {
+    return {{m.v[0] ? a.v[0] : b.v[0], m.v[1] ? a.v[1] : b.v[1], m.v[2] ? a.v[2] : b.v[2], m.v[3] ? a.v[3] : b.v[3]}};
+  }
+  // Bit k set when lane k of the mask is.
+  static unsigned bits(M m) {
+    return static_cast<unsigned>(m.v[0]) | static_cast<unsigned>(m.v[1]) << 1 | static_cast<unsigned>(m.v[2]) << 2 |
+           static_cast<unsigned>(m.v[3]) << 3;
+  }
   // first = (p0[0], p1[0], p2[0], p3[0]), second = (p0[1], ..., p3[1]).
   static void gather2(const float* const p[4], F& first, F& second) {
     for (int k = 0; k < 4; ++k) {
@@ -69,6 +86,7 @@ struct Portable {
 struct Sse2 {
   static constexpr const char* kName = "sse2";
   using F = __m128;
+  using M = __m128;  // all bits set in lanes where a comparison holds
 
   static F load(const float* p) { return _mm_loadu_ps(p); }
   static void store(float* p, F a) { _mm_storeu_ps(p, a); }
@@ -83,6 +101,11 @@ struct Sse2 {
         _mm_add_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(2, 2, 0, 0)), _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 3, 1, 1)));
     return _mm_cvtss_f32(_mm_add_ss(pairs, _mm_movehl_ps(pairs, pairs)));
   }
+  static M lessThan(F a, F b) { return _mm_cmplt_ps(a, b); }
+  static M lessEqual(F a, F b) { return _mm_cmple_ps(a, b); }
+  static M both(M a, M b) { return _mm_and_ps(a, b); }
+  static F select(M m, F a, F b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
+  static unsigned bits(M m) { return static_cast<unsigned>(_mm_movemask_ps(m)); }
   static F load2(const float* p) { return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p))); }
   static void gather2(const float* const p[4], F& first, F& second) {
     const F lo = _mm_movelh_ps(load2(p[0]), load2(p[1]));  // a0 b0 a1 b1
@@ -110,6 +133,7 @@ struct Sse2 {
 struct Neon {
   static constexpr const char* kName = "neon";
   using F = float32x4_t;
+  using M = uint32x4_t;  // all bits set in lanes where a comparison holds
 
   static F load(const float* p) { return vld1q_f32(p); }
   static void store(float* p, F a) { vst1q_f32(p, a); }
@@ -124,6 +148,18 @@ struct Neon {
   static float sum(F a) {
     const float32x2_t pairs = vpadd_f32(vget_low_f32(a), vget_high_f32(a));  // a0+a1, a2+a3
     return vget_lane_f32(pairs, 0) + vget_lane_f32(pairs, 1);
+  }
+  static M lessThan(F a, F b) { return vcltq_f32(a, b); }
+  static M lessEqual(F a, F b) { return vcleq_f32(a, b); }
+  static M both(M a, M b) { return vandq_u32(a, b); }
+  static F select(M m, F a, F b) { return vbslq_f32(m, a, b); }
+  static unsigned bits(M m) {
+    // Lane k keeps bit k; two pairwise additions (also on 32-bit ARM, which lacks vaddvq) sum them.
+    static const std::uint32_t kLaneBits[4] = {1u, 2u, 4u, 8u};
+    const uint32x4_t lane_bits = vandq_u32(m, vld1q_u32(kLaneBits));
+    uint32x2_t pairs = vpadd_u32(vget_low_u32(lane_bits), vget_high_u32(lane_bits));
+    pairs = vpadd_u32(pairs, pairs);
+    return vget_lane_u32(pairs, 0);
   }
   static void gather2(const float* const p[4], F& first, F& second) {
     const float32x4x2_t split = vuzpq_f32(vcombine_f32(vld1_f32(p[0]), vld1_f32(p[1])),   // a0 b0 a1 b1
