@@ -49,6 +49,19 @@ class StereoResiduals {
     r = uv - lm.px[static_cast<std::size_t>(frame)][c];
     return r.allFinite();
   }
+  // The same with the landmark's HostBearing, built from poses[lm.host] (with_jacobian when jac is
+  // asked for): what a pass over all of a landmark's residuals computes once.
+  bool residual(const WindowPoses& poses, const HostBearing& bearing, const Landmark& lm, int frame, int cam,
+                Eigen::Vector2d& r, ReprojectionJacobians* jac) const {
+    Eigen::Vector2d uv;
+    const auto c = static_cast<std::size_t>(cam);
+    if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)], bearing,
+                           poses[static_cast<std::size_t>(frame)], cam0_cam_[c], lm.rho, uv, jac)) {
+      return false;
+    }
+    r = uv - lm.px[static_cast<std::size_t>(frame)][c];
+    return r.allFinite();
+  }
   // Weight of a residual of norm e in the normal equations (inverse variance times the Huber weight).
   double weight(double e) const { return inv_var_ * (e <= huber_px_ ? 1.0 : huber_px_ / e); }
   // Its robust cost.

@@ -38,11 +38,12 @@ void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
     for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
       const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
       if (!lm.alive || (lm.mask & bits) == 0) continue;
+      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, true);
       for (int c = 0; c < 2; ++c) {
         if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
         Eigen::Vector2d r;
         ReprojectionJacobians J;
-        if (!model_.residual(poses, lm, frame, c, r, &J)) continue;
+        if (!model_.residual(poses, bearing, lm, frame, c, r, &J)) continue;
         // Huber weights here too (Basalt's pose step ignores them, so one bad track can drag it).
         const double w = model_.weight(r.norm());
         H.noalias() += w * J.d_target.transpose() * J.d_target;
@@ -71,10 +72,11 @@ double WindowOptimizer::cost(const WindowState& state) const {
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
     const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
     if (!lm.alive) continue;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
-      const double e = model_.residual(poses, lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
+      const double e = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
       total += model_.cost(e);
     }
   }
@@ -97,12 +99,13 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
     L.b_l.setZero();
     L.frames = 0;
     const int h = lm.host;
+    const HostBearing bearing(poses[static_cast<std::size_t>(h)], lm.s, true);
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       const int t = bit / 2;
       Eigen::Vector2d r;
       ReprojectionJacobians J;
-      if (!model_.residual(poses, lm, t, bit % 2, r, &J)) continue;
+      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J)) continue;
       const double w = model_.weight(r.norm());
       L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
       L.b_l.noalias() += w * J.d_landmark.transpose() * r;
@@ -269,10 +272,12 @@ void WindowOptimizer::filterOutliers(const WindowState& state) const {
       continue;
     }
     std::uint32_t outliers = 0;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
-      if (!model_.residual(poses, lm, bit / 2, bit % 2, r, nullptr) || r.norm() > config_.outlier_threshold_px) {
+      if (!model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ||
+          r.norm() > config_.outlier_threshold_px) {
         outliers |= 1u << bit;
       }
     }
