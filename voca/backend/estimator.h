@@ -4,18 +4,18 @@
 // camera model, Levenberg-Marquardt with per-landmark Schur elimination, keyframe marginalisation
 // into a square-root prior with first-estimate linearisation points, failure detection and reset.
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
-#include <array>
 #include <cstdint>
 #include <string_view>
 #include <utility>
 #include <vector>
 
 #include "voca/backend/backend_config.h"
-#include "voca/backend/id_map.h"
-#include "voca/backend/reprojection.h"
+#include "voca/backend/landmark_store.h"
+#include "voca/backend/marginalization_prior.h"
+#include "voca/backend/stereo_residuals.h"
+#include "voca/backend/window.h"
+#include "voca/backend/window_optimizer.h"
 #include "voca/calib/calibration.h"
 #include "voca/core/tracked_frame.h"
 #include "voca/geometry/se3.h"
@@ -60,8 +60,9 @@ struct PoseEstimate {
   double time_ms = 0.0;
 };
 
-// Sliding-window estimator. Not thread-safe. All memory is allocated in the constructor; process()
-// does not allocate.
+// Sliding-window estimator: the orchestrator of a Window of frames, a LandmarkStore, triangulation,
+// the WindowOptimizer and the MarginalizationPrior (voca/backend/*.h). Not thread-safe. All memory is allocated in the
+// constructor; process() does not allocate.
 class VoEstimator {
  public:
   // Uses the rig's first two cameras (cam0 = left, the reference). Throws InputError for an invalid
@@ -75,8 +76,8 @@ class VoEstimator {
   void reset();
 
   const BackendConfig& config() const { return config_; }
-  int numKeyframes() const;
-  int numLandmarks() const { return num_landmarks_; }
+  int numKeyframes() const { return window_.numKeyframes(); }
+  int numLandmarks() const { return landmarks_.size(); }
 
   // ---- inspection, for tests and diagnostics (these allocate) ----
   // (t_ns, T_world_cam0) of every frame in the window, oldest first.
@@ -93,120 +94,27 @@ class VoEstimator {
   bool dropViewsOfOldestKeyframe();
 
  private:
-  static constexpr int kDim = 6 * kMaxWindowFrames;
-  using MatH = Eigen::Matrix<double, kDim, kDim>;
-  using VecH = Eigen::Matrix<double, kDim, 1>;
-  using Mat63 = Eigen::Matrix<double, 6, 3>;
-
-  struct Observation {
-    std::uint64_t id = 0;
-    Eigen::Vector2d px = Eigen::Vector2d::Zero();
-  };
-  struct Frame {
-    bool active = false;
-    bool keyframe = false;
-    bool in_prior = false;  // the prior's linearisation point T_lin is fixed (first estimate)
-    std::int64_t t_ns = 0;
-    std::int64_t frame_index = 0;
-    std::int64_t sequence = 0;  // order of creation
-    SE3d T_w_c;
-    SE3d T_w_c_lin;
-    SE3d T_w_c_backup;
-    std::array<std::vector<Observation>, 2> obs;  // sorted by id, capacity fixed
-  };
-  struct Landmark {
-    bool alive = false;
-    int alive_pos = -1;  // index in alive_
-    std::uint64_t id = 0;
-    int host = -1;
-    Eigen::Vector2d s = Eigen::Vector2d::Zero();
-    double rho = 0.0;
-    Eigen::Vector2d s_backup = Eigen::Vector2d::Zero();
-    double rho_backup = 0.0;
-    std::uint32_t mask = 0;  // bit 2 * frame + camera: observed there
-    std::array<std::array<Eigen::Vector2d, 2>, kMaxWindowFrames> px;
-  };
-  // Per-landmark linearisation, kept for the Schur complement and back-substitution.
-  struct LandmarkLin {
-    Eigen::Matrix3d H_ll;
-    Eigen::Vector3d b_l;
-    Eigen::Matrix3d H_ll_inv;  // damped
-    std::array<Mat63, kMaxWindowFrames> H_pl;
-    std::uint32_t frames = 0;  // bit per frame slot with a non-zero H_pl
-    bool valid = false;
-  };
-
-  // Every window slot's pose as matrices, taken at the start of a pass over the residuals.
-  using FramePoses = std::array<PoseMatrices, kMaxWindowFrames>;
-
-  static int maskBit(int frame, int cam) { return 2 * frame + cam; }
-  int numObs(const Landmark& lm) const;
-  FramePoses framePoses() const;
-  bool residual(const Landmark& lm, int frame, int cam, Eigen::Vector2d& r, ReprojectionJacobians* jac) const;
-  // The same with the poses of framePoses() (still current).
-  bool residual(const FramePoses& poses, const Landmark& lm, int frame, int cam, Eigen::Vector2d& r,
-                ReprojectionJacobians* jac) const;
-
   // Steps of process().
   bool initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c);
   void dropNonKeyframes(int keep);
-  int allocateFrame(const TrackedStereoFrame& frame, const SE3d& T_w_c);
-  void attachObservations(int frame);
-  void optimizePose(int frame);
   int removeFrameOutliers(int frame, double threshold_px);
   bool isNewKeyframe(int frame) const;
-  int triangulateNew(int frame);
-  int optimize(int max_iterations, bool filter);
-  void filterOutliers();
   int chooseKeyframeToMarginalize(int newest) const;
   void prepareMarginalization(int frame);
   void marginalize(int frame);
-  int oldestKeyframe() const;
-  void removeLandmark(int index);
   void removeFrame(int frame);
   void frameStats(int frame, PoseEstimate& out) const;
-
-  // LM pieces.
-  double cost() const;
-  double priorCost() const;
-  Eigen::Matrix<double, 6, 1> priorDelta(int frame) const;
-  // Normal equations of the residuals (all landmarks, or only_landmarks) plus the prior. Without
-  // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads).
-  void linearize(MatH& H, VecH& b, const std::vector<int>* only_landmarks, bool full_hessian);
-  void backup();
-  void restore();
-  void applyIncrement(const VecH& dx);
+  backend::WindowState state() { return {window_, landmarks_, prior_}; }
 
   BackendConfig config_;
-  std::array<GenericCamera<double>, 2> cameras_;
-  std::array<SE3d, 2> T_cam0_cam_;
-  std::array<PoseMatrices, 2> cam0_cam_;  // T_cam0_cam_ as matrices
+  backend::StereoResiduals model_;
   SE3d T_body_cam0_;
-  double huber_px_ = 1.0;
-  double inv_var_ = 4.0;
-
-  std::array<Frame, kMaxWindowFrames> frames_;
-  std::int64_t sequence_ = 0;
-  std::vector<Landmark> landmarks_;
-  std::vector<LandmarkLin> lin_;
-  std::vector<int> free_landmarks_;
-  std::vector<int> alive_;  // indices of the alive landmarks, so loops never scan the whole pool
-  std::vector<int> scratch_landmarks_;
-  std::vector<std::uint64_t> scratch_ids_;
-  IdSlotMap id_to_landmark_;
-  int num_landmarks_ = 0;
+  backend::Window window_;
+  backend::LandmarkStore landmarks_;
+  backend::MarginalizationPrior prior_;
+  backend::WindowOptimizer optimizer_;
+  std::vector<int> scratch_landmarks_;  // the landmarks marginalised with a keyframe
   int frames_since_kf_ = 0;
-
-  // Square-root prior 1/2 |R delta + r|^2, stored expanded: H = R^T R, g = R^T r, c = r^T r.
-  MatH prior_H_;
-  VecH prior_g_;
-  double prior_c_ = 0.0;
-
-  // Work space (fixed size, so the solver never allocates).
-  MatH H_, H_reduced_;
-  VecH b_, b_reduced_, dx_;
-  Eigen::LDLT<MatH> ldlt_;
-  Eigen::SelfAdjointEigenSolver<MatH> eigen_;
 
   bool initialized_ = false;
   bool pending_reset_ = false;  // a failure happened; the next successful initialisation is a reset

@@ -60,20 +60,34 @@ struct PoseMatrices {
   }
 };
 
-// Projects the landmark (bearing s and inverse distance rho in the host frame's cam0) into camera
-// `camera` of the target frame, whose pose in that frame's cam0 is cam0_cam. host and target hold
-// T_world_cam0 of the host and target frames. Works in homogeneous coordinates scaled by rho, so a
+// What every residual of one landmark shares: its unit bearing in the host's cam0 (with the
+// derivative by s when Jacobians are wanted) and that bearing in world axes. Computed once per
+// landmark and pass over the residuals instead of once per residual; the same values either way.
+struct HostBearing {
+  Eigen::Vector3d b;
+  Eigen::Matrix<double, 3, 2> d_b_d_s;  // set only with_jacobian
+  Eigen::Vector3d Rb_w;                 // host.R * b
+
+  HostBearing() = default;
+  HostBearing(const PoseMatrices& host, const Eigen::Vector2d& s, bool with_jacobian) {
+    b = stereographicUnproject(s, with_jacobian ? &d_b_d_s : nullptr);
+    Rb_w = host.R * b;
+  }
+};
+
+// Projects the landmark (bearing from HostBearing and inverse distance rho in the host frame's cam0)
+// into camera `camera` of the target frame, whose pose in that frame's cam0 is cam0_cam. host and
+// target hold T_world_cam0 of the host and target frames; bearing must have been built from host
+// (with_jacobian when jacobians are asked for). Works in homogeneous coordinates scaled by rho, so a
 // point at infinity (rho = 0) is fine. Returns false when the camera model cannot project it.
-inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const PoseMatrices& target,
-                              const PoseMatrices& cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const HostBearing& bearing,
+                              const PoseMatrices& target, const PoseMatrices& cam0_cam, double rho, Eigen::Vector2d& uv,
                               ReprojectionJacobians* jacobians = nullptr) {
-  Eigen::Matrix<double, 3, 2> d_b_d_s;
-  const Eigen::Vector3d b = stereographicUnproject(s, jacobians != nullptr ? &d_b_d_s : nullptr);
   const Eigen::Matrix3d& R_w_h = host.R;
   const Eigen::Matrix3d& R_t_w = target.R_inv;
   const Eigen::Matrix3d& R_cam_cam0 = cam0_cam.R_inv;
   const Eigen::Vector3d dt_w = host.t - target.t;
-  const Eigen::Vector3d Rb_w = R_w_h * b;
+  const Eigen::Vector3d& Rb_w = bearing.Rb_w;
   // v: the point relative to the target origin, in world axes, scaled by rho.
   const Eigen::Vector3d v_w = Rb_w + dt_w * rho;
   const Eigen::Vector3d p_cam = R_cam_cam0 * (R_t_w * v_w - cam0_cam.t * rho);
@@ -87,10 +101,18 @@ inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMat
     jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
     // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
     jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
-    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * d_b_d_s;
+    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * bearing.d_b_d_s;
     jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * cam0_cam.t;
   }
   return true;
+}
+
+// The same with the landmark's stereographic bearing s.
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const PoseMatrices& target,
+                              const PoseMatrices& cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
+                              ReprojectionJacobians* jacobians = nullptr) {
+  return reprojectLandmark(camera, host, HostBearing(host, s, jacobians != nullptr), target, cam0_cam, rho, uv,
+                           jacobians);
 }
 
 // The same from the poses themselves: T_world_host, T_world_target and T_cam0_cam.

@@ -1,0 +1,316 @@
+#include "voca/backend/window_optimizer.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+namespace voca::backend {
+
+namespace {
+
+// A landmark whose outlier observations leave fewer than this many is dropped as a whole
+// (Basalt's filterOutliers(threshold, 4)): with so few views the remaining ones are suspect too.
+constexpr int kFilterMinObservations = 4;
+// Relative cost decrease below which LM stops.
+constexpr double kConvergedRelativeDecrease = 1e-6;
+// Regularisation of blocks that are inverted without damping (marginalisation); far below any
+// real information (a 1 px error at 1 m gives about 1e5 on the pose diagonal).
+constexpr double kTinyRegularization = 1e-9;
+
+}  // namespace
+
+WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResiduals& model)
+    : config_(config), model_(model) {
+  lin_.resize(static_cast<std::size_t>(config_.max_landmarks));
+}
+
+// ---- single-frame pose step ---------------------------------------------------------------------
+
+void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
+  const LandmarkStore& landmarks = state.landmarks;
+  const std::uint32_t bits = frameBits(frame);
+  WindowPoses poses = windowPoses(state.window);
+  for (int it = 0; it < config_.pose_only_iterations; ++it) {
+    poses[static_cast<std::size_t>(frame)].set(state.window[frame].T_w_c);
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Vector6d b = Vector6d::Zero();
+    int count = 0;
+    for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
+      const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
+      if (!lm.alive || (lm.mask & bits) == 0) continue;
+      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, true);
+      for (int c = 0; c < 2; ++c) {
+        if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
+        Eigen::Vector2d r;
+        ReprojectionJacobians J;
+        if (!model_.residual(poses, bearing, lm, frame, c, r, &J)) continue;
+        // Huber weights here too (Basalt's pose step ignores them, so one bad track can drag it).
+        const double w = model_.weight(r.norm());
+        H.noalias() += w * J.d_target.transpose() * J.d_target;
+        b.noalias() += w * J.d_target.transpose() * r;
+        ++count;
+      }
+    }
+    if (count < 3) return;
+    H.diagonal().array() += 1e-6 * (1.0 + H.diagonal().array());
+    const Vector6d dx = -H.ldlt().solve(b);
+    if (!dx.allFinite()) return;
+    applyPoseIncrement(state.window[frame].T_w_c, dx);
+    if (dx.norm() < 1e-10) return;
+  }
+}
+
+// ---- window optimisation ------------------------------------------------------------------------
+
+double WindowOptimizer::cost(const WindowState& state) const {
+  // An observation that cannot be projected counts like an error of 10x the outlier threshold, so
+  // that a step moving points behind a camera is rejected.
+  const double invalid_e = 10.0 * config_.outlier_threshold_px;
+  const LandmarkStore& landmarks = state.landmarks;
+  const WindowPoses poses = windowPoses(state.window);
+  double total = 0.0;
+  for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
+    const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
+    if (!lm.alive) continue;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+      const int bit = std::countr_zero(m);
+      Eigen::Vector2d r;
+      const double e = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
+      total += model_.cost(e);
+    }
+  }
+  return total + state.prior.cost(state.window);
+}
+
+void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian) {
+  WindowMatrix& H = H_;
+  WindowVector& b = b_;
+  H.setZero();
+  b.setZero();
+  const std::vector<int>& list = only_landmarks != nullptr ? *only_landmarks : state.landmarks.alive();
+  const WindowPoses poses = windowPoses(state.window);
+  for (const int i : list) {
+    const Landmark& lm = state.landmarks[i];
+    LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+    L.valid = false;
+    if (!lm.alive) continue;
+    L.H_ll.setZero();
+    L.b_l.setZero();
+    L.frames = 0;
+    const int h = lm.host;
+    const HostBearing bearing(poses[static_cast<std::size_t>(h)], lm.s, true);
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+      const int bit = std::countr_zero(m);
+      const int t = bit / 2;
+      Eigen::Vector2d r;
+      ReprojectionJacobians J;
+      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J)) continue;
+      const double w = model_.weight(r.norm());
+      L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
+      L.b_l.noalias() += w * J.d_landmark.transpose() * r;
+      L.valid = true;
+      if (t == h) continue;  // relative pose is the fixed extrinsic: no pose Jacobian
+      for (const int f : {h, t}) {
+        if ((L.frames & (1u << f)) == 0) {
+          L.H_pl[static_cast<std::size_t>(f)].setZero();
+          L.frames |= 1u << f;
+        }
+      }
+      const Eigen::Matrix<double, 6, 2> JhW = w * J.d_host.transpose();
+      const Eigen::Matrix<double, 6, 2> JtW = w * J.d_target.transpose();
+      H.block<6, 6>(6 * h, 6 * h).noalias() += JhW * J.d_host;
+      H.block<6, 6>(6 * t, 6 * t).noalias() += JtW * J.d_target;
+      // The LM solve reads only the lower triangle (LDLT<Lower>): the block above is skipped there.
+      if (full_hessian || h > t) H.block<6, 6>(6 * h, 6 * t).noalias() += JhW * J.d_target;
+      if (full_hessian || t > h) H.block<6, 6>(6 * t, 6 * h).noalias() += JtW * J.d_host;
+      b.segment<6>(6 * h).noalias() += JhW * r;
+      b.segment<6>(6 * t).noalias() += JtW * r;
+      L.H_pl[static_cast<std::size_t>(h)].noalias() += JhW * J.d_landmark;
+      L.H_pl[static_cast<std::size_t>(t)].noalias() += JtW * J.d_landmark;
+    }
+  }
+  state.prior.addTo(state.window, H, b);
+}
+
+void WindowOptimizer::backup(const WindowState& state) {
+  for (int f = 0; f < kMaxWindowFrames; ++f) state.window[f].T_w_c_backup = state.window[f].T_w_c;
+  for (const int i : state.landmarks.alive()) {
+    Landmark& lm = state.landmarks[i];
+    if (!lm.alive) continue;
+    lm.s_backup = lm.s;
+    lm.rho_backup = lm.rho;
+  }
+}
+
+void WindowOptimizer::restore(const WindowState& state) {
+  for (int f = 0; f < kMaxWindowFrames; ++f) state.window[f].T_w_c = state.window[f].T_w_c_backup;
+  for (const int i : state.landmarks.alive()) {
+    Landmark& lm = state.landmarks[i];
+    if (!lm.alive) continue;
+    lm.s = lm.s_backup;
+    lm.rho = lm.rho_backup;
+  }
+}
+
+void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVector& dx) {
+  for (int f = 0; f < kMaxWindowFrames; ++f) {
+    if (state.window[f].active) applyPoseIncrement(state.window[f].T_w_c, dx.segment<6>(6 * f));
+  }
+  const std::vector<int>& alive = state.landmarks.alive();
+  for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
+    const int i = alive[static_cast<std::size_t>(k)];
+    Landmark& lm = state.landmarks[i];
+    const LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+    if (!lm.alive || !L.valid) continue;
+    Eigen::Vector3d rhs = L.b_l;
+    for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
+      const int f = std::countr_zero(m);
+      rhs.noalias() += L.H_pl[static_cast<std::size_t>(f)].transpose() * dx.segment<6>(6 * f);
+    }
+    const Eigen::Vector3d dl = -L.H_ll_inv * rhs;
+    lm.s += dl.head<2>();
+    lm.rho += dl(2);
+  }
+}
+
+int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool filter) {
+  double lambda = config_.lm_lambda_initial;
+  bool filtered = !filter;
+  double current = cost(state);
+  const std::vector<int>& alive = state.landmarks.alive();
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    if (!filtered && it >= config_.filter_iteration) {
+      filterOutliers(state);
+      filtered = true;
+      current = cost(state);
+    }
+    linearize(state, nullptr, false);
+    bool accepted = false;
+    bool converged = false;
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      // Reduced camera system: damp, eliminate every landmark (Schur complement per landmark). Only
+      // the lower triangle is formed: the LDLT reads nothing else, so the upper half would be
+      // work thrown away.
+      H_reduced_ = H_;
+      b_reduced_ = b_;
+      for (int k = 0; k < kWindowDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
+      for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
+        const int i = alive[static_cast<std::size_t>(k)];
+        LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+        if (!state.landmarks[i].alive || !L.valid) continue;
+        Eigen::Matrix3d H_ll = L.H_ll;
+        for (int d = 0; d < 3; ++d) H_ll(d, d) += lambda * std::max(L.H_ll(d, d), 1e-6) + kTinyRegularization;
+        L.H_ll_inv = H_ll.inverse();
+        if (!L.H_ll_inv.allFinite()) {
+          L.valid = false;
+          continue;
+        }
+        std::array<Mat63, kMaxWindowFrames> T;
+        for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
+          const int f = std::countr_zero(m);
+          T[static_cast<std::size_t>(f)].noalias() = L.H_pl[static_cast<std::size_t>(f)] * L.H_ll_inv;
+          b_reduced_.segment<6>(6 * f).noalias() -= T[static_cast<std::size_t>(f)] * L.b_l;
+          // Slots g <= f: the bits of L.frames up to and including f.
+          const std::uint32_t lower = L.frames & ((2u << f) - 1u);
+          for (std::uint32_t n = lower; n != 0; n &= n - 1) {
+            const int g = std::countr_zero(n);
+            H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -=
+                T[static_cast<std::size_t>(f)] * L.H_pl[static_cast<std::size_t>(g)].transpose();
+          }
+        }
+      }
+      for (int f = 0; f < kMaxWindowFrames; ++f) {
+        if (state.window[f].active) continue;
+        H_reduced_.block<6, 6>(6 * f, 6 * f).setIdentity();
+        b_reduced_.segment<6>(6 * f).setZero();
+      }
+      ldlt_.compute(H_reduced_);
+      dx_ = ldlt_.solve(-b_reduced_);
+      if (dx_.allFinite()) {
+        backup(state);
+        applyIncrement(state, dx_);
+        const double next = cost(state);
+        if (std::isfinite(next) && next <= current) {
+          accepted = true;
+          converged = current - next <= kConvergedRelativeDecrease * current;
+          current = next;
+          if (config_.use_lm) lambda = std::max(config_.lm_lambda_min, lambda / 3.0);
+          break;
+        }
+        restore(state);
+      }
+      if (!config_.use_lm || lambda >= config_.lm_lambda_max) break;
+      lambda = std::min(config_.lm_lambda_max, lambda * 10.0);
+    }
+    if (!accepted || converged) {
+      if (!filtered) {
+        // Converged before the filter iteration: filter now and optimise the cleaned problem.
+        filterOutliers(state);
+        filtered = true;
+        current = cost(state);
+        continue;
+      }
+      ++it;
+      break;
+    }
+  }
+  if (!filtered) filterOutliers(state);
+  return it;
+}
+
+void WindowOptimizer::filterOutliers(const WindowState& state) const {
+  LandmarkStore& landmarks = state.landmarks;
+  const WindowPoses poses = windowPoses(state.window);
+  for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
+    const int i = landmarks.alive()[static_cast<std::size_t>(k)];
+    Landmark& lm = landmarks[i];
+    if (!lm.alive) continue;
+    if (!(lm.rho > 0.0 && lm.rho <= 2.0 * config_.max_inverse_distance) || !lm.s.allFinite()) {
+      landmarks.remove(i);
+      continue;
+    }
+    std::uint32_t outliers = 0;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+      const int bit = std::countr_zero(m);
+      Eigen::Vector2d r;
+      if (!model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ||
+          r.norm() > config_.outlier_threshold_px) {
+        outliers |= 1u << bit;
+      }
+    }
+    if (outliers == 0) continue;
+    const bool host_outlier = (outliers & (1u << maskBit(lm.host, 0))) != 0;
+    if (host_outlier || lm.numObs() - std::popcount(outliers) < kFilterMinObservations) {
+      landmarks.remove(i);
+    } else {
+      lm.mask &= ~outliers;
+    }
+  }
+}
+
+// ---- marginalisation ----------------------------------------------------------------------------
+
+void WindowOptimizer::linearizeForMarginalization(const WindowState& state, const std::vector<int>& landmarks) {
+  // Information on the window from the prior and the marginalised landmarks, landmarks eliminated.
+  linearize(state, &landmarks, true);
+  for (const int i : landmarks) {
+    LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+    if (!L.valid) continue;
+    const Eigen::Matrix3d H_ll_inv = (L.H_ll + kTinyRegularization * Eigen::Matrix3d::Identity()).inverse();
+    if (!H_ll_inv.allFinite()) continue;
+    for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
+      const int f = std::countr_zero(m);
+      const Mat63 T = L.H_pl[static_cast<std::size_t>(f)] * H_ll_inv;
+      b_.segment<6>(6 * f).noalias() -= T * L.b_l;
+      for (std::uint32_t n = L.frames; n != 0; n &= n - 1) {
+        const int g = std::countr_zero(n);
+        H_.block<6, 6>(6 * f, 6 * g).noalias() -= T * L.H_pl[static_cast<std::size_t>(g)].transpose();
+      }
+    }
+  }
+}
+
+}  // namespace voca::backend

@@ -1,0 +1,81 @@
+#pragma once
+// Levenberg-Marquardt on the window: Huber-weighted reprojection residuals plus the
+// marginalisation prior, every landmark eliminated by its own Schur complement (the reduced camera
+// system is solved, landmarks are back-substituted), outlier filtering, and the pose-only step that
+// places a new frame before the window is optimised.
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "voca/backend/backend_config.h"
+#include "voca/backend/landmark_store.h"
+#include "voca/backend/marginalization_prior.h"
+#include "voca/backend/stereo_residuals.h"
+#include "voca/backend/window.h"
+
+namespace voca::backend {
+
+// The state the optimiser works on, owned by the estimator.
+struct WindowState {
+  Window& window;
+  LandmarkStore& landmarks;
+  MarginalizationPrior& prior;
+};
+
+class WindowOptimizer {
+ public:
+  WindowOptimizer() = default;
+  // All memory for max_landmarks is taken here.
+  WindowOptimizer(const BackendConfig& config, const StereoResiduals& model);
+
+  // Total cost: robust reprojection cost (an observation that cannot be projected counts like an
+  // error of 10x the outlier threshold) plus the prior's.
+  double cost(const WindowState& state) const;
+  // Up to max_iterations LM iterations; with `filter`, outliers are removed at filter_iteration (or
+  // on convergence, whichever comes first). Returns the iterations run.
+  int optimize(const WindowState& state, int max_iterations, bool filter);
+  // Removes observations off by more than the outlier threshold; landmarks whose host view is an
+  // outlier, that keep too few views or whose depth left the valid range die.
+  void filterOutliers(const WindowState& state) const;
+  // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed.
+  void optimizePose(const WindowState& state, int frame) const;
+
+  // Marginalisation: the normal equations of the prior and the given landmarks' residuals, with
+  // those landmarks eliminated. The result stays in hessian() and gradient() for the prior.
+  void linearizeForMarginalization(const WindowState& state, const std::vector<int>& landmarks);
+  WindowMatrix& hessian() { return H_; }
+  const WindowVector& gradient() const { return b_; }
+  WindowVector& gradient() { return b_; }
+
+ private:
+  using Mat63 = Eigen::Matrix<double, 6, 3>;
+  // Per-landmark linearisation, kept for the Schur complement and back-substitution.
+  struct LandmarkLin {
+    Eigen::Matrix3d H_ll;
+    Eigen::Vector3d b_l;
+    Eigen::Matrix3d H_ll_inv;  // damped
+    std::array<Mat63, kMaxWindowFrames> H_pl;
+    std::uint32_t frames = 0;  // bit per frame slot with a non-zero H_pl
+    bool valid = false;
+  };
+
+  // Normal equations of the residuals (all landmarks, or only_landmarks) plus the prior. Without
+  // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads).
+  void linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian);
+  static void backup(const WindowState& state);
+  static void restore(const WindowState& state);
+  void applyIncrement(const WindowState& state, const WindowVector& dx);
+
+  BackendConfig config_;
+  StereoResiduals model_;
+  std::vector<LandmarkLin> lin_;
+  // Work space (fixed size, so the solver never allocates).
+  WindowMatrix H_, H_reduced_;
+  WindowVector b_, b_reduced_, dx_;
+  Eigen::LDLT<WindowMatrix> ldlt_;
+};
+
+}  // namespace voca::backend
