@@ -64,7 +64,7 @@ TEST_CASE("bench sequence: cache root from XDG_CACHE_HOME, else HOME/.cache; nam
   CHECK(voca::harness::describeBenchSequence(spec).find("752x480") != std::string::npos);
   spec.camera = "tumvi";
   spec.bitrate_bps = 2'000'000;
-  CHECK(voca::harness::benchSequenceFolder(spec, "/c") == fs::path("/c/bench/tumvi-aggressive-40s-2M"));
+  CHECK(voca::harness::benchSequenceFolder(spec, "/c") == fs::path("/c/bench/tumvi-aggressive-40s-2000k"));
   CHECK(voca::harness::describeBenchSequence(spec).find("512x512") != std::string::npos);
 
   spec.camera = "nope";

@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "drivers/encode/video_encoder.h"
 #include "pipeline/vo/vo_runner.h"
 #include "platform/process/child_process.h"
 #include "voca/core/error.h"
@@ -20,12 +21,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kRateHz = 20;  // `voca synth`'s default rate, given explicitly so the frame count is known
-
-std::string bitrateName(std::int64_t bps) {
-  if (bps % 1'000'000 == 0) return fmt::format("{}M", bps / 1'000'000);
-  if (bps % 1'000 == 0) return fmt::format("{}k", bps / 1'000);
-  return fmt::format("{}", bps);
-}
 
 void checkSpec(const BenchSequenceSpec& spec) {
   if (!synth::builtinRig(spec.camera)) {
@@ -96,7 +91,7 @@ fs::path benchCacheRoot() {
 
 fs::path benchSequenceFolder(const BenchSequenceSpec& spec, const fs::path& root) {
   return root / "bench" /
-         fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, bitrateName(spec.bitrate_bps));
+         fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, encode::bitrateLabel(spec.bitrate_bps));
 }
 
 std::string benchSequenceConfig(const BenchSequenceSpec& spec) { return spec.camera; }
@@ -104,9 +99,9 @@ std::string benchSequenceConfig(const BenchSequenceSpec& spec) { return spec.cam
 std::string describeBenchSequence(const BenchSequenceSpec& spec) {
   checkSpec(spec);
   const StereoRig rig = *synth::builtinRig(spec.camera);
-  return fmt::format("moving {} sequence ({}x{} synthetic, {} motion, {} s, {} bit/s)", spec.camera,
+  return fmt::format("moving {} sequence ({}x{} synthetic, {} motion, {} s, {}bit/s)", spec.camera,
                      rig.cameras[0].width, rig.cameras[0].height, spec.motion, spec.seconds,
-                     bitrateName(spec.bitrate_bps));
+                     encode::bitrateLabel(spec.bitrate_bps));
 }
 
 std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const fs::path& root,

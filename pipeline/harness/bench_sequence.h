@@ -29,7 +29,7 @@ std::filesystem::path benchSequenceFolder(const BenchSequenceSpec& spec, const s
 // The config a spec's camera is measured with (the shipped config of the same name).
 std::string benchSequenceConfig(const BenchSequenceSpec& spec);
 
-// "moving euroc sequence (752x480 synthetic, aggressive motion, 40 s, 500 kbit/s)", for headers.
+// "moving euroc sequence (752x480 synthetic, aggressive motion, 40 s, 500kbit/s)", for headers.
 std::string describeBenchSequence(const BenchSequenceSpec& spec);
 
 // The video folder of spec under root, generating it first when it is missing: `voca_executable
