@@ -40,8 +40,8 @@ void printResult(const pipeline::DecodeBenchOptions& opts, const pipeline::Decod
   fmt::print("{}\n", r.decoder_description);
   const char* unit = stereo ? "stereo frame (both cameras)" : "frame";
   fmt::print(
-      "{} frames per run, {} runs per variant; this thread's CPU time per {} (fps from the mean;\n"
-      "wall-clock fps also shown, lower when other processes share the cores):\n",
+      "{} frames per run, {} runs per variant; this thread's CPU time per {}, fps from its mean\n"
+      "(wall-clock fps also shown, lower when other processes share the cores):\n",
       r.frames, opts.repeat, unit);
   fmt::print("  {:<38} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "variant", "median ms", "p99 ms", "mean ms", "fps",
              "wall fps");
