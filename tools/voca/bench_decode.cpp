@@ -13,7 +13,6 @@
 #include "pipeline/bench/decode_bench.h"
 #include "pipeline/harness/bench_sequence.h"
 #include "platform/machine/cpu_info.h"
-#include "platform/process/child_process.h"
 #include "platform/realtime/stop_signal.h"
 
 namespace voca::cli {
@@ -76,8 +75,8 @@ int runDecodeBench(DecodeBenchCli cli) {
     platform::installStopHandlers();
     harness::BenchSequenceSpec spec;
     spec.camera = cli.synth;
-    const std::optional<std::filesystem::path> cached = harness::ensureBenchSequence(
-        spec, harness::benchCacheRoot(), platform::currentExecutable(), true, platform::stopRequested);
+    const std::optional<std::filesystem::path> cached =
+        harness::ensureBenchSequence(spec, harness::benchCacheRoot(), true, platform::stopRequested);
     if (!cached) return platform::interruptedExitCode(platform::stopSignal());
     cli.bench.input = *cached;
     fmt::print("sequence: {}\n", harness::describeBenchSequence(spec));
