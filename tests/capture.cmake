@@ -1,7 +1,7 @@
 # V4L2 capture against an in-process fake device that speaks the kernel protocol: discovery, every
 # pixel format, side-by-side split, stereo pairing, controls, a device vanishing mid-stream.
 add_library(voca_test_fake_v4l2 STATIC fake_v4l2.cpp)
-target_link_libraries(voca_test_fake_v4l2 PUBLIC voca_drivers_capture voca_platform_realtime)
+target_link_libraries(voca_test_fake_v4l2 PUBLIC voca_platform_v4l2 voca_drivers_capture voca_platform_realtime)
 target_include_directories(voca_test_fake_v4l2 PUBLIC ${PROJECT_SOURCE_DIR})
 voca_target_defaults(voca_test_fake_v4l2)
 voca_add_test(test_capture SOURCES test_capture.cpp LIBS voca_test_fake_v4l2 voca_drivers_capture fmt::fmt

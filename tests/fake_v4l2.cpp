@@ -158,10 +158,16 @@ FakeV4l2::Handle* FakeV4l2::handle(int fd) {
 }
 
 std::vector<std::string> FakeV4l2::deviceNodes() {
-  std::vector<std::string> nodes;
+  // As the kernel's list: by node number (/dev/video2 before /dev/video10).
+  std::vector<std::pair<int, std::string>> numbered;
   for (const auto& [path, device] : devices_) {
-    if (!device->vanished) nodes.push_back(path);
+    if (device->vanished) continue;
+    const std::size_t digits = path.find_last_not_of("0123456789") + 1;
+    numbered.emplace_back(digits < path.size() ? std::stoi(path.substr(digits)) : -1, path);
   }
+  std::sort(numbered.begin(), numbered.end());
+  std::vector<std::string> nodes;
+  for (auto& [number, path] : numbered) nodes.push_back(std::move(path));
   return nodes;
 }
 
@@ -169,6 +175,10 @@ int FakeV4l2::open(const std::string& path, int /*flags*/) {
   const auto it = devices_.find(path);
   if (it == devices_.end() || it->second->vanished) {
     errno = ENOENT;
+    return -1;
+  }
+  if (it->second->spec.busy) {
+    errno = EBUSY;
     return -1;
   }
   const int fd = next_fd_++;
@@ -277,9 +287,24 @@ int FakeV4l2::ioctl(int fd, unsigned long request, void* argument) {
     }
     case VIDIOC_ENUM_FMT: {
       auto* desc = static_cast<v4l2_fmtdesc*>(argument);
-      if (desc->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || desc->index >= spec.formats.size()) return fail(EINVAL);
-      desc->pixelformat = spec.formats[desc->index];
-      copyName(desc->description, sizeof(desc->description), capture::fourccName(desc->pixelformat) + " (fake)");
+      const bool capture =
+          desc->type == V4L2_BUF_TYPE_VIDEO_CAPTURE || desc->type == V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE;
+      const bool output = desc->type == V4L2_BUF_TYPE_VIDEO_OUTPUT || desc->type == V4L2_BUF_TYPE_VIDEO_OUTPUT_MPLANE;
+      const bool mplane =
+          desc->type == V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE || desc->type == V4L2_BUF_TYPE_VIDEO_OUTPUT_MPLANE;
+      const bool m2m = (spec.capabilities & (V4L2_CAP_VIDEO_M2M | V4L2_CAP_VIDEO_M2M_MPLANE)) != 0;
+      if (mplane != ((spec.capabilities & V4L2_CAP_VIDEO_M2M_MPLANE) != 0) || (output && !m2m)) return fail(EINVAL);
+      std::vector<std::pair<std::uint32_t, bool>> listed;  // fourcc, compressed
+      if (capture) {
+        for (const std::uint32_t f : spec.formats) listed.emplace_back(f, false);
+        for (const std::uint32_t f : spec.compressed_capture) listed.emplace_back(f, true);
+      } else if (output) {
+        for (const std::uint32_t f : spec.compressed_output) listed.emplace_back(f, true);
+      }
+      if (desc->index >= listed.size()) return fail(EINVAL);
+      desc->pixelformat = listed[desc->index].first;
+      desc->flags = listed[desc->index].second ? V4L2_FMT_FLAG_COMPRESSED : 0;
+      copyName(desc->description, sizeof(desc->description), platform::fourccName(desc->pixelformat) + " (fake)");
       return 0;
     }
     case VIDIOC_ENUM_FRAMESIZES: {

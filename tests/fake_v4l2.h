@@ -1,5 +1,5 @@
 #pragma once
-// An in-process fake of V4L2 camera devices behind the capture seam (drivers/capture/v4l2_io.h).
+// An in-process fake of V4L2 camera devices behind the capture seam (platform/v4l2/v4l2_io.h).
 // It speaks the kernel protocol with the real <linux/videodev2.h> structs: QUERYCAP, ENUM_FMT,
 // ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS, G/S_FMT, G/S_PARM, QUERYCTRL/S_CTRL, REQBUFS, QUERYBUF,
 // mmap, QBUF/DQBUF, STREAMON/OFF and poll, rejecting calls out of protocol order as a driver does.
@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "drivers/capture/v4l2_io.h"
+#include "platform/v4l2/v4l2_io.h"
 
 namespace voca::test {
 
@@ -26,6 +26,10 @@ struct FakeCameraSpec {
   std::string driver = "fakecam", card = "Fake Camera", bus = "platform:fake";
   std::uint32_t capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;  // the node's device_caps
   std::vector<std::uint32_t> formats = {V4L2_PIX_FMT_GREY};
+  // A memory-to-memory codec node (capabilities V4L2_CAP_VIDEO_M2M*) lists these compressed formats
+  // (V4L2_FMT_FLAG_COMPRESSED) on its OUTPUT queue (a decoder's input) or after `formats` on its
+  // CAPTURE queue (an encoder's output), single- and multi-planar alike.
+  std::vector<std::uint32_t> compressed_output, compressed_capture;
   std::vector<std::pair<int, int>> sizes = {{64, 48}};  // offered for every format; the first is current
   std::vector<double> rates_hz = {30.0};                // offered for every size; the first is current
   std::size_t line_padding = 0;                         // bytes after each line (bytesperline > width)
@@ -34,6 +38,7 @@ struct FakeCameraSpec {
   std::vector<std::uint32_t> dropped_sequences;         // the "driver" skips these sequence numbers
   bool monotonic = true;                                // else V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN
   bool paced = false;            // frames become ready at the rate in real time, stamped with CLOCK_MONOTONIC
+  bool busy = false;             // open fails with EBUSY (another process holds it)
   int vanish_after_frames = -1;  // the device disappears (ENODEV) after delivering this many frames
   bool has_exposure = false, has_gain = false;
   int exposure_min = 1, exposure_max = 5000;
@@ -43,7 +48,7 @@ struct FakeCameraSpec {
 // The gray value at (x, y) of frame `sequence`: textured and moving, so the tracker finds corners.
 std::uint8_t fakePixel(int x, int y, std::uint32_t sequence);
 
-class FakeV4l2 final : public capture::V4l2Io {
+class FakeV4l2 final : public platform::V4l2Io {
  public:
   FakeV4l2();
   ~FakeV4l2() override;

@@ -1,5 +1,5 @@
 // The benchmarks' default moving sequence (pipeline/harness/bench_sequence.h): cache location and
-// naming, bad specs, and one real generation through the `voca` binary (a short one: 1 s of video),
+// naming, bad specs, a stopped generation, and one real generation (a short one: 1 s of video),
 // reused on the second call.
 
 #include <doctest/doctest.h>
@@ -64,33 +64,41 @@ TEST_CASE("bench sequence: cache root from XDG_CACHE_HOME, else HOME/.cache; nam
   CHECK(voca::harness::describeBenchSequence(spec).find("752x480") != std::string::npos);
   spec.camera = "tumvi";
   spec.bitrate_bps = 2'000'000;
-  CHECK(voca::harness::benchSequenceFolder(spec, "/c") == fs::path("/c/bench/tumvi-aggressive-40s-2M"));
+  CHECK(voca::harness::benchSequenceFolder(spec, "/c") == fs::path("/c/bench/tumvi-aggressive-40s-2000k"));
   CHECK(voca::harness::describeBenchSequence(spec).find("512x512") != std::string::npos);
 
   spec.camera = "nope";
   const std::string error =
-      voca::test::inputErrorOf([&] { voca::harness::ensureBenchSequence(spec, "/nonexistent", "voca", false, {}); });
+      voca::test::inputErrorOf([&] { voca::harness::ensureBenchSequence(spec, "/nonexistent", false, {}); });
   CHECK(error.find("unknown camera 'nope'") != std::string::npos);
 }
 
-TEST_CASE("bench sequence: generated once through voca synth and the encoder, then reused") {
+TEST_CASE("bench sequence: rendered and encoded once, then reused; a stop leaves no folder") {
   voca::test::ScratchDir dir("bench-sequence");
   BenchSequenceSpec spec;
   spec.seconds = 1;
-  const fs::path voca = fs::path(VOCA_BINARY_DIR) / "bin" / "voca";
-  const std::optional<fs::path> video = voca::harness::ensureBenchSequence(spec, dir.path(), voca, false, {});
+  // Stopped before the first frame: nothing is cached, so the next call starts over.
+  int asked = 0;
+  CHECK_FALSE(voca::harness::ensureBenchSequence(spec, dir.path(), false, [&] { return ++asked > 0; }));
+  CHECK(asked >= 1);
+  CHECK_FALSE(fs::exists(voca::harness::benchSequenceFolder(spec, dir.path())));
+
+  const std::optional<fs::path> video = voca::harness::ensureBenchSequence(spec, dir.path(), false, {});
   REQUIRE(video);
   CHECK(*video == voca::harness::benchSequenceFolder(spec, dir.path()));
   const voca::Dataset dataset = voca::openDataset(*video);
   CHECK(dataset.layout == voca::DatasetLayout::kVocaVideo);
+  CHECK(dataset.frames.size() == 20);  // 1 s at 20 Hz
   CHECK(dataset.ground_truth.has_value());
   // Only the finished video stays: no partial folders, no rendering.
   int entries = 0;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir / "bench")) {
-    CHECK((entry.path() == *video || entry.path().filename() == "logs"));
+    CHECK(entry.path() == *video);
     ++entries;
   }
-  CHECK(entries == 2);
-  // The second call finds it: a missing executable would fail if it tried to render.
-  CHECK(voca::harness::ensureBenchSequence(spec, dir.path(), dir / "no-voca", false, {}) == video);
+  CHECK(entries == 1);
+  // The second call finds it without rendering again: the video is not rewritten.
+  const auto written = fs::last_write_time(dataset.video_left);
+  CHECK(voca::harness::ensureBenchSequence(spec, dir.path(), false, [] { return true; }) == video);
+  CHECK(fs::last_write_time(dataset.video_left) == written);
 }

@@ -4,6 +4,8 @@
 #include <doctest/doctest.h>
 #include <linux/videodev2.h>
 
+#include <cerrno>
+#include <cstring>
 #include <optional>
 #include <string>
 
@@ -13,6 +15,8 @@
 #include "drivers/capture/v4l2_camera.h"
 #include "drivers/capture/v4l2_devices.h"
 #include "platform/realtime/clock.h"
+#include "platform/v4l2/m2m_devices.h"
+#include "platform/v4l2/v4l2_nodes.h"
 #include "tests/fake_v4l2.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
@@ -66,7 +70,7 @@ StereoCameraOptions twoCameras() {
 TEST_CASE("every supported pixel format converts to the exact gray values, with padded lines") {
   for (const std::uint32_t fourcc :
        {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_Y10, V4L2_PIX_FMT_Y16, V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_NV12}) {
-    CAPTURE(fourccName(fourcc));
+    CAPTURE(platform::fourccName(fourcc));
     FakeV4l2 io;
     FakeCameraSpec spec;
     spec.formats = {V4L2_PIX_FMT_MJPEG, fourcc};  // a compressed format first: it must be skipped
@@ -158,6 +162,79 @@ TEST_CASE("discovery lists only capture nodes with their formats, sizes and rate
   test::expectError(test::inputErrorOf([&] { V4l2Camera(io, "/dev/video11", {}); }),
                     "/dev/video11: not a camera (bcm2835-codec is a memory-to-memory codec); available: /dev/video0 "
                     "(uvcvideo, HD Webcam)");
+}
+
+TEST_CASE("one discovery walks the nodes for cameras and memory-to-memory codecs alike") {
+  FakeV4l2 io;
+  FakeCameraSpec webcam;  // a UVC camera that also streams H.264: compressed on CAPTURE, but no codec
+  webcam.path = "/dev/video0";
+  webcam.driver = "uvcvideo";
+  webcam.compressed_capture = {V4L2_PIX_FMT_H264};
+  io.add(webcam);
+  FakeCameraSpec decoder;  // a stateful multi-planar decoder: H.264 and MPEG-2 in on OUTPUT
+  decoder.path = "/dev/video10";
+  decoder.driver = "rpivid";
+  decoder.capabilities = V4L2_CAP_VIDEO_M2M_MPLANE | V4L2_CAP_STREAMING;
+  decoder.formats = {V4L2_PIX_FMT_NV12};
+  decoder.compressed_output = {V4L2_PIX_FMT_H264, V4L2_PIX_FMT_MPEG2};
+  io.add(decoder);
+  FakeCameraSpec encoder;  // a single-planar encoder: H.264 out on CAPTURE
+  encoder.path = "/dev/video2";
+  encoder.driver = "bcm2835-codec";
+  encoder.capabilities = V4L2_CAP_VIDEO_M2M | V4L2_CAP_STREAMING;
+  encoder.formats = {};
+  encoder.compressed_capture = {V4L2_PIX_FMT_H264};
+  io.add(encoder);
+  FakeCameraSpec busy;  // listed but cannot be opened
+  busy.path = "/dev/video3";
+  busy.busy = true;
+  io.add(busy);
+
+  // The shared walk: every node that opens, in number order, with its QUERYCAP answer.
+  std::vector<std::string> visited, skipped;
+  platform::forEachV4l2Node(
+      io,
+      [&](int fd, const platform::V4l2NodeInfo& node) {
+        visited.push_back(node.path + " " + node.driver);
+        if (node.path == "/dev/video10") {
+          const auto output = platform::enumerateFormats(io, fd, V4L2_BUF_TYPE_VIDEO_OUTPUT_MPLANE);
+          REQUIRE(output.size() == 2);
+          CHECK(output[1].fourcc == V4L2_PIX_FMT_MPEG2);
+          CHECK(output[1].compressed);
+          CHECK(output[1].description == "MPG2 (fake)");
+          const auto capture = platform::enumerateFormats(io, fd, V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE);
+          REQUIRE(capture.size() == 1);
+          CHECK_FALSE(capture[0].compressed);
+          CHECK(platform::enumerateFormats(io, fd, V4L2_BUF_TYPE_VIDEO_CAPTURE).empty());  // no single-planar queue
+        }
+      },
+      &skipped);
+  CHECK(visited ==
+        std::vector<std::string>{"/dev/video0 uvcvideo", "/dev/video2 bcm2835-codec", "/dev/video10 rpivid"});
+  REQUIRE(skipped.size() == 1);
+  CHECK(skipped[0] == std::string("/dev/video3: ") + std::strerror(EBUSY));
+  CHECK(io.openHandles() == 0);
+
+  // Cameras and codecs are chosen from that one walk by their capabilities.
+  const std::vector<V4l2DeviceInfo> cameras = listCameras(io);
+  REQUIRE(cameras.size() == 1);
+  CHECK(cameras[0].path == "/dev/video0");
+  CHECK(cameras[0].formats.size() == 2);  // GREY and the compressed H.264
+  using platform::M2mRole;
+  CHECK(platform::findM2mCodecNodes(M2mRole::kDecoder, V4L2_PIX_FMT_H264, io) ==
+        std::vector<std::string>{"/dev/video10"});
+  CHECK(platform::findM2mCodecNodes(M2mRole::kDecoder, V4L2_PIX_FMT_MPEG2, io) ==
+        std::vector<std::string>{"/dev/video10"});
+  CHECK(platform::findM2mCodecNodes(M2mRole::kEncoder, V4L2_PIX_FMT_H264, io) ==
+        std::vector<std::string>{"/dev/video2"});
+  CHECK(platform::findM2mCodecNodes(M2mRole::kDecoder, V4L2_PIX_FMT_MPEG4, io).empty());
+  platform::V4l2NodeCaps caps;
+  REQUIRE(platform::queryV4l2Node("/dev/video10", caps, io));
+  CHECK(caps.driver == "rpivid");
+  CHECK(caps.output_formats == std::vector<std::uint32_t>{V4L2_PIX_FMT_H264, V4L2_PIX_FMT_MPEG2});
+  CHECK(caps.capture_formats.empty());
+  CHECK_FALSE(platform::queryV4l2Node("/dev/video3", caps, io));
+  CHECK(io.openHandles() == 0);
 }
 
 TEST_CASE("a missing device names the cameras that exist, or says none were found") {

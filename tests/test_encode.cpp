@@ -65,6 +65,16 @@ TEST_CASE("parseBitrate accepts plain numbers and k/M suffixes") {
   CHECK(parseBitrate("250000") == 250000);
 }
 
+TEST_CASE("bitrateLabel spells rates in kilobits when whole, and parseBitrate reads every label back") {
+  CHECK(bitrateLabel(500000) == "500k");
+  CHECK(bitrateLabel(1000000) == "1000k");
+  CHECK(bitrateLabel(2000000) == "2000k");
+  CHECK(bitrateLabel(1500) == "1500");
+  for (const std::int64_t bps : {1000LL, 1500LL, 250000LL, 1000000LL, 1500000LL, 12345678LL}) {
+    CHECK(parseBitrate(bitrateLabel(bps)) == bps);
+  }
+}
+
 TEST_CASE("two-pass libx264 with the paper's settings: frames, rate, GOP and bitrate") {
   // 2 s at 30 fps. 192x144 keeps this fast under emulation; 200 kbit/s gives it about the bits per
   // pixel of the paper's 500 kbit/s at 320x240.

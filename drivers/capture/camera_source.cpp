@@ -50,7 +50,8 @@ std::vector<std::string> parseDeviceList(std::string_view text) {
   return devices;
 }
 
-CameraStereoSource::CameraStereoSource(const StereoCameraOptions& options, V4l2Io& io) : options_(options), io_(io) {
+CameraStereoSource::CameraStereoSource(const StereoCameraOptions& options, platform::V4l2Io& io)
+    : options_(options), io_(io) {
   if (options_.devices.empty() || options_.devices.size() > 2) {
     throw InputError("cameras: expected one side-by-side stereo device or two devices (left, right)");
   }

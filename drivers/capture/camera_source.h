@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "drivers/capture/v4l2_camera.h"
-#include "drivers/capture/v4l2_io.h"
 #include "drivers/source/stereo_source.h"
+#include "platform/v4l2/v4l2_io.h"
 
 namespace voca::capture {
 
@@ -38,7 +38,7 @@ class CameraStereoSource : public StereoSource {
   // Opens the devices (nothing streams until the first next()). Throws InputError for a missing
   // device (naming those available), a format problem, two cameras of different sizes, or a
   // side-by-side device of odd width.
-  explicit CameraStereoSource(const StereoCameraOptions& options, V4l2Io& io = systemV4l2Io());
+  explicit CameraStereoSource(const StereoCameraOptions& options, platform::V4l2Io& io = platform::systemV4l2Io());
   ~CameraStereoSource() override;
 
   const SourceInfo& info() const override { return info_; }
@@ -56,7 +56,7 @@ class CameraStereoSource : public StereoSource {
   bool fillPending(int timeout_ms);
 
   StereoCameraOptions options_;
-  V4l2Io& io_;
+  platform::V4l2Io& io_;
   std::vector<std::unique_ptr<V4l2Camera>> cameras_;
   bool side_by_side_ = false;
   SourceInfo info_;

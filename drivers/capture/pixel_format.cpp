@@ -5,7 +5,7 @@
 
 #include <cstring>
 
-#include "drivers/capture/v4l2_io.h"
+#include "platform/v4l2/v4l2_io.h"
 #include "voca/core/error.h"
 
 namespace voca::capture {
@@ -29,13 +29,13 @@ const std::uint32_t* grayConvertibleFormats(std::size_t& count) {
 
 std::string grayConvertibleList() {
   std::string list;
-  for (const std::uint32_t f : kFormats) list += (list.empty() ? "" : ", ") + fourccName(f);
+  for (const std::uint32_t f : kFormats) list += (list.empty() ? "" : ", ") + platform::fourccName(f);
   return list;
 }
 
 std::uint32_t parseGrayConvertibleFormat(std::string_view text) {
   for (const std::uint32_t f : kFormats) {
-    if (fourccName(f) == text) return f;
+    if (platform::fourccName(f) == text) return f;
   }
   throw InputError(fmt::format("pixel format \"{}\": expected one of {}", text, grayConvertibleList()));
 }
@@ -48,14 +48,14 @@ std::size_t frameBytes(std::uint32_t fourcc, std::size_t bytes_per_line, int hei
 void convertToGray(const std::uint8_t* data, std::size_t bytes_used, std::uint32_t fourcc, std::size_t bytes_per_line,
                    int x0, int width, int height, GrayImage& out) {
   if (!isGrayConvertible(fourcc)) {
-    throw InputError(
-        fmt::format("pixel format {} is not supported (expected {})", fourccName(fourcc), grayConvertibleList()));
+    throw InputError(fmt::format("pixel format {} is not supported (expected {})", platform::fourccName(fourcc),
+                                 grayConvertibleList()));
   }
   // Only the luma rows are read, so a buffer holding them is enough even for NV12.
   const std::size_t needed = bytes_per_line * static_cast<std::size_t>(height);
   if (bytes_used < needed) {
     throw InputError(fmt::format("captured {} frame holds {} bytes, {} needed for {} lines of {} bytes",
-                                 fourccName(fourcc), bytes_used, needed, height, bytes_per_line));
+                                 platform::fourccName(fourcc), bytes_used, needed, height, bytes_per_line));
   }
   out.resize(width, height);
   const auto first = static_cast<std::size_t>(x0);

@@ -13,6 +13,7 @@
 #include "drivers/capture/pixel_format.h"
 #include "drivers/capture/v4l2_devices.h"
 #include "platform/realtime/clock.h"
+#include "platform/v4l2/v4l2_nodes.h"
 #include "voca/core/error.h"
 
 namespace voca::capture {
@@ -37,12 +38,13 @@ std::string openFailureReason(int error) {
 
 }  // namespace
 
-V4l2Camera::V4l2Camera(V4l2Io& io, std::string path, const CameraRequest& request) : io_(io), path_(std::move(path)) {
+V4l2Camera::V4l2Camera(platform::V4l2Io& io, std::string path, const CameraRequest& request)
+    : io_(io), path_(std::move(path)) {
   fd_ = io_.open(path_, O_RDWR | O_NONBLOCK);
   if (fd_ < 0) throw InputError(unavailableDeviceMessage(io_, path_, openFailureReason(errno)));
   try {
-    V4l2DeviceInfo info;
-    if (!queryCapabilities(io_, fd_, info)) {
+    platform::V4l2NodeInfo info;
+    if (!platform::queryCapabilities(io_, fd_, info)) {
       throw InputError(unavailableDeviceMessage(io_, path_, "not a V4L2 device"));
     }
     if (!isCameraNode(info.capabilities)) {
@@ -62,7 +64,7 @@ V4l2Camera::V4l2Camera(V4l2Io& io, std::string path, const CameraRequest& reques
     buffers.count = static_cast<std::uint32_t>(std::max(request.buffers, 2));
     buffers.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     buffers.memory = V4L2_MEMORY_MMAP;
-    if (xioctl(io_, fd_, VIDIOC_REQBUFS, &buffers) != 0) fail("VIDIOC_REQBUFS");
+    if (platform::xioctl(io_, fd_, VIDIOC_REQBUFS, &buffers) != 0) fail("VIDIOC_REQBUFS");
     if (buffers.count < 2)
       throw RuntimeFailure(fmt::format("{}: the driver granted only {} buffer", path_, buffers.count));
     for (std::uint32_t i = 0; i < buffers.count; ++i) {
@@ -70,7 +72,7 @@ V4l2Camera::V4l2Camera(V4l2Io& io, std::string path, const CameraRequest& reques
       buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
       buffer.memory = V4L2_MEMORY_MMAP;
       buffer.index = i;
-      if (xioctl(io_, fd_, VIDIOC_QUERYBUF, &buffer) != 0) fail("VIDIOC_QUERYBUF");
+      if (platform::xioctl(io_, fd_, VIDIOC_QUERYBUF, &buffer) != 0) fail("VIDIOC_QUERYBUF");
       void* address = io_.mmap(buffer.length, fd_, buffer.m.offset);
       if (address == MAP_FAILED) fail("mmap");
       mappings_.push_back({address, buffer.length});
@@ -98,21 +100,22 @@ void V4l2Camera::negotiateFormat(const CameraRequest& request) {
   std::vector<std::uint32_t> offered;
   v4l2_fmtdesc description{};
   description.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  for (description.index = 0; xioctl(io_, fd_, VIDIOC_ENUM_FMT, &description) == 0; ++description.index) {
+  for (description.index = 0; platform::xioctl(io_, fd_, VIDIOC_ENUM_FMT, &description) == 0; ++description.index) {
     offered.push_back(description.pixelformat);
   }
   std::string offered_list;
-  for (const std::uint32_t f : offered) offered_list += (offered_list.empty() ? "" : ", ") + fourccName(f);
+  for (const std::uint32_t f : offered) offered_list += (offered_list.empty() ? "" : ", ") + platform::fourccName(f);
   const auto offers = [&](std::uint32_t f) { return std::find(offered.begin(), offered.end(), f) != offered.end(); };
 
   std::uint32_t fourcc = request.fourcc;
   if (fourcc != 0) {
     if (!isGrayConvertible(fourcc)) {
-      throw InputError(fmt::format("pixel format {}: not supported (expected one of {})", fourccName(fourcc),
+      throw InputError(fmt::format("pixel format {}: not supported (expected one of {})", platform::fourccName(fourcc),
                                    grayConvertibleList()));
     }
     if (!offers(fourcc)) {
-      throw InputError(fmt::format("{}: does not offer {} (it offers {})", path_, fourccName(fourcc), offered_list));
+      throw InputError(
+          fmt::format("{}: does not offer {} (it offers {})", path_, platform::fourccName(fourcc), offered_list));
     }
   } else {
     std::size_t count = 0;
@@ -128,7 +131,7 @@ void V4l2Camera::negotiateFormat(const CameraRequest& request) {
 
   v4l2_format current{};
   current.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (xioctl(io_, fd_, VIDIOC_G_FMT, &current) != 0) fail("VIDIOC_G_FMT");
+  if (platform::xioctl(io_, fd_, VIDIOC_G_FMT, &current) != 0) fail("VIDIOC_G_FMT");
   v4l2_format wanted{};
   wanted.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   wanted.fmt.pix.width = request.width > 0 ? static_cast<std::uint32_t>(request.width) : current.fmt.pix.width;
@@ -136,16 +139,16 @@ void V4l2Camera::negotiateFormat(const CameraRequest& request) {
   wanted.fmt.pix.pixelformat = fourcc;
   wanted.fmt.pix.field = V4L2_FIELD_NONE;
   v4l2_format granted = wanted;
-  if (xioctl(io_, fd_, VIDIOC_S_FMT, &granted) != 0) fail("VIDIOC_S_FMT");
+  if (platform::xioctl(io_, fd_, VIDIOC_S_FMT, &granted) != 0) fail("VIDIOC_S_FMT");
   // Drivers adjust what they cannot do instead of failing: check what came back.
   if (granted.fmt.pix.pixelformat != fourcc) {
-    throw InputError(fmt::format("{}: asked for {} but the driver chose {}", path_, fourccName(fourcc),
-                                 fourccName(granted.fmt.pix.pixelformat)));
+    throw InputError(fmt::format("{}: asked for {} but the driver chose {}", path_, platform::fourccName(fourcc),
+                                 platform::fourccName(granted.fmt.pix.pixelformat)));
   }
   if ((request.width > 0 || request.height > 0) &&
       (granted.fmt.pix.width != wanted.fmt.pix.width || granted.fmt.pix.height != wanted.fmt.pix.height)) {
     throw InputError(fmt::format("{}: does not capture {}x{} in {} (nearest: {}x{}; `voca devices` lists the sizes)",
-                                 path_, wanted.fmt.pix.width, wanted.fmt.pix.height, fourccName(fourcc),
+                                 path_, wanted.fmt.pix.width, wanted.fmt.pix.height, platform::fourccName(fourcc),
                                  granted.fmt.pix.width, granted.fmt.pix.height));
   }
   format_.fourcc = fourcc;
@@ -163,7 +166,7 @@ void V4l2Camera::negotiateFormat(const CameraRequest& request) {
 void V4l2Camera::setRate(double rate_hz) {
   v4l2_streamparm parameters{};
   parameters.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (xioctl(io_, fd_, VIDIOC_G_PARM, &parameters) != 0) {
+  if (platform::xioctl(io_, fd_, VIDIOC_G_PARM, &parameters) != 0) {
     if (rate_hz > 0.0) warnings_.push_back(fmt::format("{}: the frame rate cannot be set (no VIDIOC_G_PARM)", path_));
     return;
   }
@@ -173,7 +176,7 @@ void V4l2Camera::setRate(double rate_hz) {
           fmt::format("{}: the driver does not let the frame rate be set; capturing at its own", path_));
     } else {
       parameters.parm.capture.timeperframe = {1000, static_cast<std::uint32_t>(std::lround(rate_hz * 1000.0))};
-      if (xioctl(io_, fd_, VIDIOC_S_PARM, &parameters) != 0) fail("VIDIOC_S_PARM");
+      if (platform::xioctl(io_, fd_, VIDIOC_S_PARM, &parameters) != 0) fail("VIDIOC_S_PARM");
     }
   }
   const v4l2_fract& interval = parameters.parm.capture.timeperframe;
@@ -186,7 +189,7 @@ void V4l2Camera::setRate(double rate_hz) {
 void V4l2Camera::setControl(std::uint32_t id, int value, const char* what) {
   v4l2_queryctrl query{};
   query.id = id;
-  if (xioctl(io_, fd_, VIDIOC_QUERYCTRL, &query) != 0) fail("VIDIOC_QUERYCTRL");
+  if (platform::xioctl(io_, fd_, VIDIOC_QUERYCTRL, &query) != 0) fail("VIDIOC_QUERYCTRL");
   if (value < query.minimum || value > query.maximum) {
     throw InputError(fmt::format("{}: {} {} is outside the device's range {} to {}", path_, what, value, query.minimum,
                                  query.maximum));
@@ -194,7 +197,7 @@ void V4l2Camera::setControl(std::uint32_t id, int value, const char* what) {
   v4l2_control control{};
   control.id = id;
   control.value = value;
-  if (xioctl(io_, fd_, VIDIOC_S_CTRL, &control) != 0) fail(fmt::format("VIDIOC_S_CTRL ({})", what));
+  if (platform::xioctl(io_, fd_, VIDIOC_S_CTRL, &control) != 0) fail(fmt::format("VIDIOC_S_CTRL ({})", what));
 }
 
 void V4l2Camera::applyControls(const CaptureControls& controls) {
@@ -203,7 +206,8 @@ void V4l2Camera::applyControls(const CaptureControls& controls) {
     for (const std::uint32_t id : candidates) {
       v4l2_queryctrl query{};
       query.id = id;
-      if (xioctl(io_, fd_, VIDIOC_QUERYCTRL, &query) == 0 && (query.flags & V4L2_CTRL_FLAG_DISABLED) == 0) return id;
+      if (platform::xioctl(io_, fd_, VIDIOC_QUERYCTRL, &query) == 0 && (query.flags & V4L2_CTRL_FLAG_DISABLED) == 0)
+        return id;
     }
     return 0;
   };
@@ -224,7 +228,7 @@ void V4l2Camera::applyControls(const CaptureControls& controls) {
 
 std::string V4l2Camera::description() const {
   return fmt::format("{} ({}, {}) {}x{} {}{}", path_, driver_, card_, format_.width, format_.height,
-                     fourccName(format_.fourcc),
+                     platform::fourccName(format_.fourcc),
                      format_.rate_hz > 0.0 ? fmt::format(" {:g} fps", format_.rate_hz) : "");
 }
 
@@ -235,10 +239,10 @@ void V4l2Camera::start() {
     buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     buffer.memory = V4L2_MEMORY_MMAP;
     buffer.index = static_cast<std::uint32_t>(i);
-    if (xioctl(io_, fd_, VIDIOC_QBUF, &buffer) != 0) fail("VIDIOC_QBUF");
+    if (platform::xioctl(io_, fd_, VIDIOC_QBUF, &buffer) != 0) fail("VIDIOC_QBUF");
   }
   int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (xioctl(io_, fd_, VIDIOC_STREAMON, &type) != 0) fail("VIDIOC_STREAMON");
+  if (platform::xioctl(io_, fd_, VIDIOC_STREAMON, &type) != 0) fail("VIDIOC_STREAMON");
   streaming_ = true;
   have_sequence_ = false;
   frames_lost_ = 0;
@@ -249,14 +253,14 @@ void V4l2Camera::stop() {
   if (!streaming_) return;
   streaming_ = false;
   int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  xioctl(io_, fd_, VIDIOC_STREAMOFF, &type);  // fails only for a vanished device, which stops anyway
+  platform::xioctl(io_, fd_, VIDIOC_STREAMOFF, &type);  // fails only for a vanished device, which stops anyway
 }
 
 bool V4l2Camera::dequeue(CapturedBuffer& out) {
   v4l2_buffer buffer{};
   buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   buffer.memory = V4L2_MEMORY_MMAP;
-  if (xioctl(io_, fd_, VIDIOC_DQBUF, &buffer) != 0) {
+  if (platform::xioctl(io_, fd_, VIDIOC_DQBUF, &buffer) != 0) {
     if (errno == EAGAIN) return false;
     if (errno == ENODEV) {
       throw RuntimeFailure(
@@ -302,7 +306,7 @@ void V4l2Camera::requeue(const CapturedBuffer& out) {
   buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   buffer.memory = V4L2_MEMORY_MMAP;
   buffer.index = static_cast<std::uint32_t>(out.index);
-  if (xioctl(io_, fd_, VIDIOC_QBUF, &buffer) != 0) fail("VIDIOC_QBUF");
+  if (platform::xioctl(io_, fd_, VIDIOC_QBUF, &buffer) != 0) fail("VIDIOC_QBUF");
 }
 
 }  // namespace voca::capture

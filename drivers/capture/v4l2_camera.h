@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/capture/v4l2_io.h"
+#include "platform/v4l2/v4l2_io.h"
 
 namespace voca::capture {
 
@@ -53,7 +53,7 @@ class V4l2Camera {
   // Opens path (non-blocking) and prepares streaming. Throws InputError for a missing node or one
   // that is not a camera (naming the cameras that exist), an unsupported format or size, or a
   // control the device lacks or a value outside its range; RuntimeFailure when the kernel refuses.
-  V4l2Camera(V4l2Io& io, std::string path, const CameraRequest& request);
+  V4l2Camera(platform::V4l2Io& io, std::string path, const CameraRequest& request);
   ~V4l2Camera();
   V4l2Camera(const V4l2Camera&) = delete;
   V4l2Camera& operator=(const V4l2Camera&) = delete;
@@ -93,7 +93,7 @@ class V4l2Camera {
   void setControl(std::uint32_t id, int value, const char* what);
   [[noreturn]] void fail(const std::string& call) const;
 
-  V4l2Io& io_;
+  platform::V4l2Io& io_;
   std::string path_;
   int fd_ = -1;
   std::string driver_, card_;

@@ -1,12 +1,9 @@
 #include "drivers/capture/v4l2_devices.h"
 
-#include <fcntl.h>
 #include <fmt/core.h>
 #include <linux/videodev2.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 
 #include "drivers/capture/pixel_format.h"
 
@@ -14,21 +11,16 @@ namespace voca::capture {
 
 namespace {
 
-std::string cString(const std::uint8_t* text, std::size_t size) {
-  const auto* begin = reinterpret_cast<const char*>(text);
-  return std::string(begin, strnlen(begin, size));
-}
-
 double rateOf(const v4l2_fract& interval) {
   return interval.numerator > 0 ? static_cast<double>(interval.denominator) / interval.numerator : 0.0;
 }
 
-void enumerateRates(V4l2Io& io, int fd, std::uint32_t fourcc, FrameSizeInfo& size) {
+void enumerateRates(platform::V4l2Io& io, int fd, std::uint32_t fourcc, FrameSizeInfo& size) {
   v4l2_frmivalenum interval{};
   interval.pixel_format = fourcc;
   interval.width = static_cast<std::uint32_t>(size.width);
   interval.height = static_cast<std::uint32_t>(size.height);
-  for (interval.index = 0; xioctl(io, fd, VIDIOC_ENUM_FRAMEINTERVALS, &interval) == 0; ++interval.index) {
+  for (interval.index = 0; platform::xioctl(io, fd, VIDIOC_ENUM_FRAMEINTERVALS, &interval) == 0; ++interval.index) {
     if (interval.type == V4L2_FRMIVAL_TYPE_DISCRETE) {
       size.rates_hz.push_back(rateOf(interval.discrete));
       continue;
@@ -41,10 +33,10 @@ void enumerateRates(V4l2Io& io, int fd, std::uint32_t fourcc, FrameSizeInfo& siz
   if (!size.rate_range) std::sort(size.rates_hz.rbegin(), size.rates_hz.rend());
 }
 
-void enumerateSizes(V4l2Io& io, int fd, PixelFormatInfo& format) {
+void enumerateSizes(platform::V4l2Io& io, int fd, PixelFormatInfo& format) {
   v4l2_frmsizeenum frame_size{};
   frame_size.pixel_format = format.fourcc;
-  for (frame_size.index = 0; xioctl(io, fd, VIDIOC_ENUM_FRAMESIZES, &frame_size) == 0; ++frame_size.index) {
+  for (frame_size.index = 0; platform::xioctl(io, fd, VIDIOC_ENUM_FRAMESIZES, &frame_size) == 0; ++frame_size.index) {
     FrameSizeInfo size;
     if (frame_size.type == V4L2_FRMSIZE_TYPE_DISCRETE) {
       size.width = static_cast<int>(frame_size.discrete.width);
@@ -65,13 +57,11 @@ void enumerateSizes(V4l2Io& io, int fd, PixelFormatInfo& format) {
   }
 }
 
-void enumerateFormats(V4l2Io& io, int fd, V4l2DeviceInfo& info) {
-  v4l2_fmtdesc description{};
-  description.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  for (description.index = 0; xioctl(io, fd, VIDIOC_ENUM_FMT, &description) == 0; ++description.index) {
+void enumerateFormats(platform::V4l2Io& io, int fd, V4l2DeviceInfo& info) {
+  for (const platform::V4l2FormatDesc& description : platform::enumerateFormats(io, fd, V4L2_BUF_TYPE_VIDEO_CAPTURE)) {
     PixelFormatInfo format;
-    format.fourcc = description.pixelformat;
-    format.description = cString(description.description, sizeof(description.description));
+    format.fourcc = description.fourcc;
+    format.description = description.description;
     format.gray_convertible = isGrayConvertible(format.fourcc);
     enumerateSizes(io, fd, format);
     info.formats.push_back(std::move(format));
@@ -94,38 +84,22 @@ bool isCameraNode(std::uint32_t capabilities) {
   return captures && !memory_to_memory && (capabilities & V4L2_CAP_STREAMING) != 0;
 }
 
-bool queryCapabilities(V4l2Io& io, int fd, V4l2DeviceInfo& info) {
-  v4l2_capability capability{};
-  if (xioctl(io, fd, VIDIOC_QUERYCAP, &capability) != 0) return false;
-  info.driver = cString(capability.driver, sizeof(capability.driver));
-  info.card = cString(capability.card, sizeof(capability.card));
-  info.bus = cString(capability.bus_info, sizeof(capability.bus_info));
-  // A driver with several nodes reports the whole device in capabilities and the node's in device_caps.
-  info.capabilities =
-      (capability.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? capability.device_caps : capability.capabilities;
-  return true;
-}
-
-std::vector<V4l2DeviceInfo> listCameras(V4l2Io& io, std::vector<std::string>* skipped) {
+std::vector<V4l2DeviceInfo> listCameras(platform::V4l2Io& io, std::vector<std::string>* skipped) {
   std::vector<V4l2DeviceInfo> cameras;
-  for (const std::string& path : io.deviceNodes()) {
-    const int fd = io.open(path, O_RDWR | O_NONBLOCK);
-    if (fd < 0) {
-      if (skipped) skipped->push_back(fmt::format("{}: {}", path, std::strerror(errno)));
-      continue;
-    }
-    V4l2DeviceInfo info;
-    info.path = path;
-    if (queryCapabilities(io, fd, info) && isCameraNode(info.capabilities)) {
-      enumerateFormats(io, fd, info);
-      cameras.push_back(std::move(info));
-    }
-    io.close(fd);
-  }
+  platform::forEachV4l2Node(
+      io,
+      [&](int fd, const platform::V4l2NodeInfo& node) {
+        if (!isCameraNode(node.capabilities)) return;
+        V4l2DeviceInfo info;
+        static_cast<platform::V4l2NodeInfo&>(info) = node;
+        enumerateFormats(io, fd, info);
+        cameras.push_back(std::move(info));
+      },
+      skipped);
   return cameras;
 }
 
-std::string unavailableDeviceMessage(V4l2Io& io, const std::string& path, const std::string& reason) {
+std::string unavailableDeviceMessage(platform::V4l2Io& io, const std::string& path, const std::string& reason) {
   std::string available;
   for (const V4l2DeviceInfo& camera : listCameras(io)) {
     if (camera.path == path) continue;
@@ -139,7 +113,7 @@ std::string formatCameraList(const std::vector<V4l2DeviceInfo>& cameras) {
   for (const V4l2DeviceInfo& camera : cameras) {
     text += fmt::format("{}: {} ({}, {})\n", camera.path, camera.card, camera.driver, camera.bus);
     for (const PixelFormatInfo& format : camera.formats) {
-      text += fmt::format("  {} \"{}\"{}\n", fourccName(format.fourcc), format.description,
+      text += fmt::format("  {} \"{}\"{}\n", platform::fourccName(format.fourcc), format.description,
                           format.gray_convertible ? "" : " (not usable: voca reads " + grayConvertibleList() + ")");
       for (const FrameSizeInfo& size : format.sizes) {
         if (size.stepwise) {

@@ -1,13 +1,14 @@
 #pragma once
-// V4L2 device discovery: which nodes are cameras (video capture, not memory-to-memory codecs or
-// metadata nodes), their driver, and the formats, frame sizes and frame rates they offer
-// (VIDIOC_QUERYCAP, ENUM_FMT, ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS).
+// V4L2 cameras: which of the nodes platform/v4l2/v4l2_nodes.h discovers are cameras (video capture,
+// not memory-to-memory codecs or metadata nodes), and the formats, frame sizes and frame rates
+// they offer (ENUM_FRAMESIZES, ENUM_FRAMEINTERVALS on top of the shared QUERYCAP and ENUM_FMT).
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "drivers/capture/v4l2_io.h"
+#include "platform/v4l2/v4l2_io.h"
+#include "platform/v4l2/v4l2_nodes.h"
 
 namespace voca::capture {
 
@@ -26,27 +27,21 @@ struct PixelFormatInfo {
   std::vector<FrameSizeInfo> sizes;
 };
 
-struct V4l2DeviceInfo {
-  std::string path;
-  std::string driver, card, bus;   // from VIDIOC_QUERYCAP
-  std::uint32_t capabilities = 0;  // the node's own (device_caps when the driver reports them)
+// A camera node: what QUERYCAP says, and its capture formats.
+struct V4l2DeviceInfo : platform::V4l2NodeInfo {
   std::vector<PixelFormatInfo> formats;
 };
 
 // True for a node that captures video: V4L2_CAP_VIDEO_CAPTURE and not a memory-to-memory device.
 bool isCameraNode(std::uint32_t capabilities);
 
-// The node's QUERYCAP capabilities (device_caps when V4L2_CAP_DEVICE_CAPS is set) and names.
-// False, with errno set, when the node cannot be opened or is not a V4L2 device.
-bool queryCapabilities(V4l2Io& io, int fd, V4l2DeviceInfo& info);
-
 // Every camera node with its formats, sizes and rates. Nodes that cannot be opened (busy, no
 // permission) are listed in skipped as "path: reason".
-std::vector<V4l2DeviceInfo> listCameras(V4l2Io& io, std::vector<std::string>* skipped = nullptr);
+std::vector<V4l2DeviceInfo> listCameras(platform::V4l2Io& io, std::vector<std::string>* skipped = nullptr);
 
 // The message for a device that cannot be used as a camera, with what can:
 // "/dev/video2: no such device; available: /dev/video0 (uvcvideo, HD Webcam)" or "...; none found".
-std::string unavailableDeviceMessage(V4l2Io& io, const std::string& path, const std::string& reason);
+std::string unavailableDeviceMessage(platform::V4l2Io& io, const std::string& path, const std::string& reason);
 
 // `voca devices`' listing: one block per camera, formats with sizes and rates.
 std::string formatCameraList(const std::vector<V4l2DeviceInfo>& cameras);

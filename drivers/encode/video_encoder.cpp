@@ -168,6 +168,11 @@ std::int64_t parseBitrate(std::string_view text) {
   return static_cast<std::int64_t>(std::llround(value));
 }
 
+std::string bitrateLabel(std::int64_t bps) {
+  if (bps % 1000 == 0) return fmt::format("{}k", bps / 1000);
+  return fmt::format("{}", bps);
+}
+
 struct VideoEncoder::Impl {
   EncoderSettings settings;
   EncoderPass pass = EncoderPass::kSingle;

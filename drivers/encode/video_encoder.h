@@ -55,6 +55,10 @@ void silenceCodecLogs();
 // Throws InputError on anything else, including zero and negative rates.
 std::int64_t parseBitrate(std::string_view text);
 
+// The one spelling of a rate in labels, folder and file names: kilobits when whole ("250k", "500k",
+// "1000k", so a table of rates reads in one unit), else bits per second. parseBitrate reads it back.
+std::string bitrateLabel(std::int64_t bps);
+
 // One compressed access unit. pts/dts are in frames at the encoder's frame rate.
 struct EncodedPacket {
   std::vector<std::uint8_t> bytes;

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 
 #include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/video_decoder.h"
+#include "formats/dataset/dataset.h"
 #include "platform/realtime/clock.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
@@ -20,27 +22,66 @@ using namespace voca::decode;
 
 double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-// Decodes all packets once; returns the number of frames and fills the per-frame vector counts.
-int decodeAll(const StreamInfo& stream, const std::vector<Packet>& packets, const DecoderOptions& options,
-              DecodedFrame& frame, std::vector<std::vector<MotionBlock>>* vectors) {
-  VideoDecoder decoder(stream, options, nullptr, "bench");
+// One camera's packets, read before timing.
+struct CameraPackets {
+  StreamInfo stream;
+  std::vector<Packet> packets;
+};
+
+// Decodes every camera's packets once, frame k of all cameras together, and returns the number of
+// frames (of the first camera). frame_cpu_ms (if given) gets this thread's CPU time per frame;
+// vectors (if given) every camera frame's motion vectors, camera by camera within a frame.
+int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& options, DecodedFrame& frame,
+              std::vector<double>* frame_cpu_ms, std::vector<std::vector<MotionBlock>>* vectors) {
+  std::vector<std::unique_ptr<VideoDecoder>> decoders;
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    decoders.push_back(
+        std::make_unique<VideoDecoder>(cameras[c].stream, options, nullptr, fmt::format("bench cam{}", c)));
+  }
   int frames = 0;
-  auto take = [&] {
-    while (decoder.receive(frame)) {
-      ++frames;
+  auto take = [&](std::size_t c) {
+    while (decoders[c]->receive(frame)) {
+      if (c == 0) ++frames;
       if (vectors != nullptr) {
         const auto blocks = frame.motion.blocks();
         vectors->emplace_back(blocks.begin(), blocks.end());
       }
     }
   };
-  for (const Packet& packet : packets) {
-    decoder.send(packet);
-    take();
+  const std::size_t count = cameras[0].packets.size();
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::int64_t start_ns = platform::threadCpuNs();
+    for (std::size_t c = 0; c < cameras.size(); ++c) {
+      decoders[c]->send(cameras[c].packets[k]);
+      take(c);
+    }
+    if (frame_cpu_ms != nullptr)
+      frame_cpu_ms->push_back(1e-6 * static_cast<double>(platform::threadCpuNs() - start_ns));
   }
-  decoder.sendEnd();
-  take();
+  // Frames the decoders still hold (none for the paper's streams, which have no B-frames) count
+  // towards the last frame.
+  const std::int64_t flush_start_ns = platform::threadCpuNs();
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    decoders[c]->sendEnd();
+    take(c);
+  }
+  if (frame_cpu_ms != nullptr && !frame_cpu_ms->empty()) {
+    frame_cpu_ms->back() += 1e-6 * static_cast<double>(platform::threadCpuNs() - flush_start_ns);
+  }
   return frames;
+}
+
+// The videos to decode together: both cameras of a VOCA video folder, or the one file given.
+std::vector<std::filesystem::path> benchVideos(const std::filesystem::path& input) {
+  if (!std::filesystem::is_directory(input)) return {input};
+  const Dataset dataset = openDataset(input);
+  if (dataset.layout != DatasetLayout::kVocaVideo) {
+    throw InputError(
+        fmt::format("{} is a {} image folder; voca bench decode needs a video file or a VOCA video "
+                    "folder (voca encode makes one)",
+                    input.string(), layoutName(dataset.layout)));
+  }
+  return {dataset.video_left, dataset.video_right};
 }
 
 bool sameVectors(const std::vector<std::vector<MotionBlock>>& a, const std::vector<std::vector<MotionBlock>>& b) {
@@ -60,19 +101,36 @@ bool sameVectors(const std::vector<std::vector<MotionBlock>>& a, const std::vect
 DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   if (opts.repeat < 1) throw InputError(fmt::format("--repeat: expected at least 1, got {}", opts.repeat));
   DecodeBenchResult result;
-  Demuxer demuxer(opts.video);
-  result.stream = demuxer.stream();
-  const StreamInfo& stream = result.stream;
+  result.videos = benchVideos(opts.input);
+  std::vector<CameraPackets> cameras;
   const auto demux_start = std::chrono::steady_clock::now();
-  const std::vector<Packet> packets = readAllPackets(demuxer);
+  for (const std::filesystem::path& video : result.videos) {
+    Demuxer demuxer(video.string());
+    CameraPackets& camera = cameras.emplace_back();
+    camera.stream = demuxer.stream();
+    camera.packets = readAllPackets(demuxer);
+    if (camera.packets.empty()) throw InputError(video.string() + ": no video packets");
+    const StreamInfo& first = cameras[0].stream;
+    if (camera.stream.codec_name != first.codec_name || camera.stream.width != first.width ||
+        camera.stream.height != first.height || camera.packets.size() != cameras[0].packets.size()) {
+      throw InputError(fmt::format("{}: {} {}x{} with {} packets, but {} is {} {}x{} with {}; the cameras must match",
+                                   video.string(), camera.stream.codec_name, camera.stream.width, camera.stream.height,
+                                   camera.packets.size(), result.videos[0].string(), first.codec_name, first.width,
+                                   first.height, cameras[0].packets.size()));
+    }
+  }
   const double demux_s = seconds(std::chrono::steady_clock::now() - demux_start);
-  if (packets.empty()) throw InputError(opts.video + ": no video packets");
+  result.stream = cameras[0].stream;
+  const StreamInfo& stream = result.stream;
   std::size_t bytes = 0;
-  for (const Packet& p : packets) bytes += p.bytes.size();
-  result.packets = packets.size();
+  for (const CameraPackets& camera : cameras) {
+    for (const Packet& p : camera.packets) bytes += p.bytes.size();
+  }
+  result.packets = cameras[0].packets.size();
+  const double all_packets = static_cast<double>(result.packets * cameras.size());
   result.stream_fps = stream.frame_rate_num > 0 ? double(stream.frame_rate_num) / stream.frame_rate_den : 0.0;
-  result.kbit_per_s = result.stream_fps > 0 ? bytes * 8.0 * result.stream_fps / packets.size() / 1000.0 : 0.0;
-  result.demux_packets_per_s = packets.size() / std::max(demux_s, 1e-9);
+  result.kbit_per_s = result.stream_fps > 0 ? bytes * 8.0 * result.stream_fps / all_packets / 1000.0 : 0.0;
+  result.demux_packets_per_s = all_packets / std::max(demux_s, 1e-9);
 
   std::vector<DecoderOptions> variants(3);
   result.variants.resize(3);
@@ -93,35 +151,37 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   // Warm-up run of each variant (caches, page faults), also checking that the MV-only parse gives the
   // same vectors as the full decode.
   std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors;
-  decodeAll(stream, packets, variants[0], frame, &full_vectors);
-  decodeAll(stream, packets, variants[1], frame, nullptr);
-  decodeAll(stream, packets, variants[2], frame, &parse_vectors);
+  decodeAll(cameras, variants[0], frame, nullptr, &full_vectors);
+  decodeAll(cameras, variants[1], frame, nullptr, nullptr);
+  decodeAll(cameras, variants[2], frame, nullptr, &parse_vectors);
   std::size_t num_vectors = 0;
   for (const auto& v : full_vectors) num_vectors += v.size();
   result.parse_vectors_identical = sameVectors(full_vectors, parse_vectors);
 
   // Variants interleaved per repeat so slow drifts of the machine affect all alike. CPU time of this
   // thread is not inflated when other processes share the cores, so it measures the work itself.
+  for (DecodeVariantResult& v : result.variants) v.frame_cpu_ms.reserve(result.packets * opts.repeat);
   for (int r = 0; r < opts.repeat; ++r) {
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const auto start = std::chrono::steady_clock::now();
-      const std::int64_t cpu_start_ns = platform::threadCpuNs();
-      result.frames = decodeAll(stream, packets, variants[v], frame, nullptr);
-      const double cpu = 1e-9 * static_cast<double>(platform::threadCpuNs() - cpu_start_ns);
+      result.frames = decodeAll(cameras, variants[v], frame, &result.variants[v].frame_cpu_ms, nullptr);
       const double elapsed = seconds(std::chrono::steady_clock::now() - start);
-      result.variants[v].wall_fps.push_back(result.frames / std::max(elapsed, 1e-9));
-      result.variants[v].cpu_fps.push_back(result.frames / std::max(cpu, 1e-9));
+      result.variants[v].run_wall_fps.push_back(result.frames / std::max(elapsed, 1e-9));
     }
     if (opts.progress) fmt::print(stderr, "\rrepeat {}/{}", r + 1, opts.repeat);
   }
   if (opts.progress) fmt::print(stderr, "\n");
   for (DecodeVariantResult& v : result.variants) {
-    v.median_cpu_fps = median(v.cpu_fps);
-    v.min_cpu_fps = quantile(v.cpu_fps, 0.0);
-    v.max_cpu_fps = quantile(v.cpu_fps, 1.0);
-    v.median_wall_fps = median(v.wall_fps);
+    v.median_ms = median(v.frame_cpu_ms);
+    v.p99_ms = quantile(v.frame_cpu_ms, 0.99);
+    double total_ms = 0.0;
+    for (double ms : v.frame_cpu_ms) total_ms += ms;
+    v.mean_ms = total_ms / static_cast<double>(std::max<std::size_t>(1, v.frame_cpu_ms.size()));
+    v.cpu_fps = 1000.0 / std::max(v.mean_ms, 1e-9);
+    v.median_wall_fps = median(v.run_wall_fps);
   }
-  result.vectors_per_frame = double(num_vectors) / std::max(1, result.frames);
+  const double camera_frames = static_cast<double>(std::max<std::size_t>(1, full_vectors.size()));
+  result.vectors_per_frame = double(num_vectors) / camera_frames;
   return result;
 }
 

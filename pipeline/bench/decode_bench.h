@@ -1,9 +1,12 @@
 #pragma once
-// `voca bench decode`: decoder throughput on this machine. Decodes a whole video held in memory on
-// one thread as (1) full decode with motion-vector export, (2) full decode without, (3) MV-only
-// parse with the loop filter skipped, and checks that the parse gives the full decode's vectors.
+// `voca bench decode`: decoder cost on this machine. Decodes a whole video, or both cameras of a VOCA
+// video folder frame by frame as the pipeline does, held in memory on one thread, as (1) full decode
+// with motion-vector export, (2) full decode without, (3) MV-only parse with the loop filter
+// skipped; times every (stereo) frame with this thread's CPU clock and checks that the parse gives
+// the full decode's vectors.
 
 #include <cstddef>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -12,7 +15,7 @@
 namespace voca::pipeline {
 
 struct DecodeBenchOptions {
-  std::string video;
+  std::filesystem::path input;       // a video file, or a VOCA video folder (both cameras)
   int repeat = 5;                    // timed runs per variant (after one warm-up run each)
   std::string decoder = "software";  // auto, software, vaapi or v4l2m2m for the full-decode variants
   bool progress = true;              // "repeat i/n" on stderr
@@ -20,25 +23,29 @@ struct DecodeBenchOptions {
 
 struct DecodeVariantResult {
   std::string label;
-  std::vector<double> cpu_fps;   // per timed run: frames / this thread's CPU time
-  std::vector<double> wall_fps;  // per timed run: frames / wall time (lower when the cores are shared)
-  double median_cpu_fps = 0.0, min_cpu_fps = 0.0, max_cpu_fps = 0.0, median_wall_fps = 0.0;
+  std::vector<double> frame_cpu_ms;  // every timed frame of every run: CPU time of all cameras' frame
+  std::vector<double> run_wall_fps;  // per timed run: frames / wall time (lower when the cores are shared)
+  double median_ms = 0.0, p99_ms = 0.0, mean_ms = 0.0;
+  double cpu_fps = 0.0;  // frames per second of this thread's CPU time (from mean_ms)
+  double median_wall_fps = 0.0;
 };
 
 struct DecodeBenchResult {
-  decode::StreamInfo stream;
-  std::size_t packets = 0;
-  double kbit_per_s = 0.0;           // at the stream's frame rate (0 when unknown)
-  double stream_fps = 0.0;           // the stream's nominal rate (0 when unknown)
-  double demux_packets_per_s = 0.0;  // reading the packets (not part of the timed runs)
-  std::string decoder_description;   // the decoder actually used (auto may fall back)
-  int frames = 0;                    // per run
-  double vectors_per_frame = 0.0;
+  std::vector<std::filesystem::path> videos;  // one per camera, decoded together per frame
+  decode::StreamInfo stream;                  // the first camera's (all must have its size and codec)
+  std::size_t packets = 0;                    // per camera
+  double kbit_per_s = 0.0;                    // per camera, at the stream's frame rate (0 when unknown)
+  double stream_fps = 0.0;                    // the stream's nominal rate (0 when unknown)
+  double demux_packets_per_s = 0.0;           // reading the packets (not part of the timed runs)
+  std::string decoder_description;            // the decoder actually used (auto may fall back)
+  int frames = 0;                             // (stereo) frames per run
+  double vectors_per_frame = 0.0;             // per camera frame
   bool parse_vectors_identical = false;       // MV-only parse == full decode's vectors
   std::vector<DecodeVariantResult> variants;  // full + MV, full without MV, MV-only parse
 };
 
-// Throws InputError for a bad --repeat, an unreadable video or one without packets.
+// Throws InputError for a bad --repeat, an unreadable video, one without packets, or cameras whose
+// videos differ in codec or size.
 DecodeBenchResult runDecodeBench(const DecodeBenchOptions& options);
 
 }  // namespace voca::pipeline

@@ -2,14 +2,11 @@
 
 #include <fmt/core.h>
 
-#include <chrono>
 #include <cstdlib>
-#include <system_error>
-#include <thread>
-#include <vector>
 
+#include "drivers/encode/video_encoder.h"
+#include "pipeline/synth/synth_runner.h"
 #include "pipeline/vo/vo_runner.h"
-#include "platform/process/child_process.h"
 #include "voca/core/error.h"
 #include "voca/synth/rigs.h"
 
@@ -19,13 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kRateHz = 20;  // `voca synth`'s default rate, given explicitly so the frame count is known
-
-std::string bitrateName(std::int64_t bps) {
-  if (bps % 1'000'000 == 0) return fmt::format("{}M", bps / 1'000'000);
-  if (bps % 1'000 == 0) return fmt::format("{}k", bps / 1'000);
-  return fmt::format("{}", bps);
-}
+constexpr double kRateHz = 20.0;  // `voca synth`'s default rate, given explicitly so the name stays true
 
 void checkSpec(const BenchSequenceSpec& spec) {
   if (!synth::builtinRig(spec.camera)) {
@@ -35,53 +26,19 @@ void checkSpec(const BenchSequenceSpec& spec) {
   if (spec.bitrate_bps <= 0) throw InputError("benchmark sequence: the bitrate must be positive");
 }
 
-std::size_t countFiles(const fs::path& folder) {
-  std::error_code error;
-  std::size_t count = 0;
-  for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) ++count;
-  return count;
-}
-
-// `voca synth` into raw (a fresh folder), reporting the frames written while it runs. False when
-// stopped (the child is left to the stop signal, which reaches the whole process group).
-bool render(const BenchSequenceSpec& spec, const fs::path& raw, const fs::path& log, const fs::path& voca_executable,
-            bool progress, const std::function<bool()>& stop_requested) {
-  const std::vector<std::string> argv = {voca_executable.string(),
-                                         "synth",
-                                         "--camera",
-                                         spec.camera,
-                                         "--motion",
-                                         spec.motion,
-                                         "--seconds",
-                                         std::to_string(spec.seconds),
-                                         "--rate",
-                                         std::to_string(kRateHz),
-                                         "--out",
-                                         raw.string()};
-  fs::create_directories(log.parent_path());
-  fs::remove(log);
-  const pid_t pid = platform::startChild(argv, log);
-  const int frames = spec.seconds * kRateHz;
-  const auto start = std::chrono::steady_clock::now();
-  for (;;) {
-    if (const std::optional<platform::ChildExit> exit = platform::pollChild(pid)) {
-      if (progress) fmt::print(stderr, "\n");
-      if (stop_requested && stop_requested()) return false;
-      if (!exit->succeeded()) {
-        throw RuntimeFailure(fmt::format("rendering the benchmark sequence failed ({}); see {}",
-                                         platform::describeExit(*exit), log.string()));
-      }
-      return true;
-    }
-    if (progress) {
-      const auto done = static_cast<int>(countFiles(raw / "mav0" / "cam1" / "data"));
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      fmt::print(stderr, "\rrendering: frame {}/{}, {:.0f} s elapsed", done, frames, elapsed);
-      if (done > 0) fmt::print(stderr, ", about {:.0f} s left", elapsed / done * (frames - done));
-      fmt::print(stderr, "   ");
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  }
+// Renders the sequence into raw (a fresh folder) in this process, with `voca synth`'s defaults
+// otherwise. False when stopped.
+bool render(const BenchSequenceSpec& spec, const fs::path& raw, bool progress,
+            const std::function<bool()>& stop_requested) {
+  pipeline::SynthOptions options;
+  options.out = raw;
+  options.camera = spec.camera;
+  options.motion = spec.motion;
+  options.seconds = spec.seconds;
+  options.rate_hz = kRateHz;
+  options.progress = progress;
+  options.stop_requested = stop_requested;
+  return !pipeline::synthesizeSequence(options).stopped;
 }
 
 }  // namespace
@@ -96,7 +53,7 @@ fs::path benchCacheRoot() {
 
 fs::path benchSequenceFolder(const BenchSequenceSpec& spec, const fs::path& root) {
   return root / "bench" /
-         fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, bitrateName(spec.bitrate_bps));
+         fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, encode::bitrateLabel(spec.bitrate_bps));
 }
 
 std::string benchSequenceConfig(const BenchSequenceSpec& spec) { return spec.camera; }
@@ -104,13 +61,12 @@ std::string benchSequenceConfig(const BenchSequenceSpec& spec) { return spec.cam
 std::string describeBenchSequence(const BenchSequenceSpec& spec) {
   checkSpec(spec);
   const StereoRig rig = *synth::builtinRig(spec.camera);
-  return fmt::format("moving {} sequence ({}x{} synthetic, {} motion, {} s, {} bit/s)", spec.camera,
+  return fmt::format("moving {} sequence ({}x{} synthetic, {} motion, {} s, {}bit/s)", spec.camera,
                      rig.cameras[0].width, rig.cameras[0].height, spec.motion, spec.seconds,
-                     bitrateName(spec.bitrate_bps));
+                     encode::bitrateLabel(spec.bitrate_bps));
 }
 
-std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const fs::path& root,
-                                            const fs::path& voca_executable, bool progress,
+std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const fs::path& root, bool progress,
                                             const std::function<bool()>& stop_requested) {
   checkSpec(spec);
   const fs::path video = benchSequenceFolder(spec, root);
@@ -124,8 +80,7 @@ std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const
     fmt::print(stderr, "generating the {} once (cached in {}); this takes minutes\n", describeBenchSequence(spec),
                video.string());
   }
-  const fs::path log = root / "bench" / "logs" / (video.filename().string() + "-synth.txt");
-  if (!render(spec, raw, log, voca_executable, progress, stop_requested)) return std::nullopt;
+  if (!render(spec, raw, progress, stop_requested)) return std::nullopt;
   if (!pipeline::encodeForReplay(raw, partial, spec.bitrate_bps, std::nullopt, progress, stop_requested)) {
     return std::nullopt;
   }

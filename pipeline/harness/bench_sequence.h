@@ -1,6 +1,6 @@
 #pragma once
 // The moving synthetic sequences the throughput benchmarks measure when given no input: rendered
-// with `voca synth --motion aggressive` and encoded like the paper's videos, once, into a cache
+// as `voca synth --motion aggressive` does and encoded like the paper's videos, once, into a cache
 // folder that later calls reuse. Static or sparse clips make a tracker look faster than it is on
 // what users run, so the default is a sequence with fast motion and texture everywhere.
 
@@ -29,18 +29,16 @@ std::filesystem::path benchSequenceFolder(const BenchSequenceSpec& spec, const s
 // The config a spec's camera is measured with (the shipped config of the same name).
 std::string benchSequenceConfig(const BenchSequenceSpec& spec);
 
-// "moving euroc sequence (752x480 synthetic, aggressive motion, 40 s, 500 kbit/s)", for headers.
+// "moving euroc sequence (752x480 synthetic, aggressive motion, 40 s, 500kbit/s)", for headers.
 std::string describeBenchSequence(const BenchSequenceSpec& spec);
 
-// The video folder of spec under root, generating it first when it is missing: `voca_executable
-// synth` as a child process (its output in <root>/bench/logs), then the two-pass encoding in this
-// process. Work goes into *.partial folders that are renamed when complete, so a folder that exists
-// is whole and an interrupted generation starts over. Progress goes to stderr when asked. Returns
-// nullopt when stop_requested() turned true; throws RuntimeFailure when rendering fails (naming the
-// log) and InputError for an invalid spec.
+// The video folder of spec under root, generating it first when it is missing: rendering (as
+// `voca synth`) and the two-pass encoding, both in this process. Work goes into *.partial folders
+// that are renamed when complete, so a folder that exists is whole and an interrupted generation
+// starts over. Progress goes to stderr when asked. Returns nullopt when stop_requested() turned
+// true (checked between frames); throws InputError for an invalid spec.
 std::optional<std::filesystem::path> ensureBenchSequence(const BenchSequenceSpec& spec,
-                                                         const std::filesystem::path& root,
-                                                         const std::filesystem::path& voca_executable, bool progress,
+                                                         const std::filesystem::path& root, bool progress,
                                                          const std::function<bool()>& stop_requested);
 
 }  // namespace voca::harness

@@ -158,11 +158,6 @@ ExternalRun parseExternal(const json& value, const fs::path& base, const std::st
   return run;
 }
 
-std::string bitrateLabel(std::int64_t bps) {
-  if (bps % 1000 == 0) return fmt::format("{}k", bps / 1000);
-  return fmt::format("{}", bps);
-}
-
 // A config's short name for labels and folders: a shipped name as is, a file by its stem.
 std::string configLabel(const std::string& config) {
   if (config.empty()) return "default";
@@ -174,7 +169,7 @@ std::string configLabel(const std::string& config) {
 std::string normaliseBitrate(const std::string& text, const std::string& context) {
   if (text == "raw") return text;
   try {
-    return bitrateLabel(encode::parseBitrate(text));
+    return encode::bitrateLabel(encode::parseBitrate(text));
   } catch (const InputError& e) {
     fail(context, fmt::format("\"{}\": expected \"raw\" or a bitrate such as 250k, 500k, 1M ({})", text, e.what()));
   }

@@ -214,6 +214,14 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   std::vector<SE3d> exposure_cam;
   std::vector<double> blur_px;
   for (int k = 0; k < frames; ++k) {
+    if (options.stop_requested && options.stop_requested()) {
+      if (options.progress) fmt::print(stderr, "\n");
+      SynthResult stopped;
+      stopped.frames = k;
+      stopped.stopped = true;
+      stopped.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      return stopped;
+    }
     exposure_body.assign(1, seq.T_world_body[k]);
     if (options.exposure_ms > 0.0) {
       // Enough poses that consecutive ones move the image by at most about a pixel, measured on cam0

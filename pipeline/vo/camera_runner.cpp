@@ -23,7 +23,7 @@ std::vector<std::string> warningsOf(const StereoSource& source) {
 
 }  // namespace
 
-std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& options, capture::V4l2Io& io) {
+std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& options, platform::V4l2Io& io) {
   std::size_t libcamera = 0;
   for (const std::string& device : options.devices) libcamera += device.starts_with(kLibcameraPrefix) ? 1 : 0;
   if (libcamera == 0) return std::make_unique<capture::CameraStereoSource>(options, io);
@@ -51,7 +51,7 @@ std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& op
 #endif
 }
 
-VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, capture::V4l2Io& io) {
+VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, platform::V4l2Io& io) {
   // Calibration and config first: a typo there should not wait for the cameras to open.
   const StereoRig rig = loadCalibration(options.calibration);
   if (rig.cameras.size() < 2) {
@@ -67,7 +67,7 @@ VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, capture:
   return result;
 }
 
-CameraRecordResult recordFromCameras(const CameraRecordOptions& options, capture::V4l2Io& io) {
+CameraRecordResult recordFromCameras(const CameraRecordOptions& options, platform::V4l2Io& io) {
   const std::unique_ptr<StereoSource> source = openCameras(options.cameras, io);
   const double fps = options.fps > 0.0                      ? options.fps
                      : source->info().nominal_rate_hz > 0.0 ? source->info().nominal_rate_hz

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "drivers/capture/camera_source.h"
-#include "drivers/capture/v4l2_io.h"
 #include "drivers/encode/video_folder_writer.h"
 #include "pipeline/vo/vo_runner.h"
+#include "platform/v4l2/v4l2_io.h"
 
 namespace voca::pipeline {
 
@@ -26,12 +26,13 @@ struct CameraRunOptions {
 
 // Opens the cameras of options.devices: V4L2 device nodes, or "libcamera:N" / "libcamera:<id>" for
 // libcamera cameras (when built with VOCA_WITH_LIBCAMERA).
-std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& options, capture::V4l2Io& io);
+std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& options, platform::V4l2Io& io);
 
 // Throws InputError for bad input found before streaming (a missing camera, calibration or config,
 // a capture size that differs from the calibration's). A device failing while streaming does not
 // throw: the result carries it in pipeline.error, with every pose estimated until then written.
-VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, capture::V4l2Io& io = capture::systemV4l2Io());
+VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options,
+                                       platform::V4l2Io& io = platform::systemV4l2Io());
 
 // Recording from cameras (`voca record`): capture -> live encoder -> a VOCA video folder.
 struct CameraRecordOptions {
@@ -52,6 +53,7 @@ struct CameraRecordResult {
 
 // Records until the cameras end (max_frames), stop_requested() or a device fails; the folder is
 // finished and playable in every case. A device failure is rethrown after the folder is finished.
-CameraRecordResult recordFromCameras(const CameraRecordOptions& options, capture::V4l2Io& io = capture::systemV4l2Io());
+CameraRecordResult recordFromCameras(const CameraRecordOptions& options,
+                                     platform::V4l2Io& io = platform::systemV4l2Io());
 
 }  // namespace voca::pipeline

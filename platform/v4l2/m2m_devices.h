@@ -9,21 +9,18 @@
 #include <string>
 #include <vector>
 
+#include "platform/v4l2/v4l2_io.h"
+#include "platform/v4l2/v4l2_nodes.h"
+
 namespace voca::platform {
 
 enum class M2mRole { kDecoder, kEncoder };
 
-// What one node reported.
-struct V4l2NodeCaps {
-  std::string path;
-  std::string driver;
-  std::uint32_t capabilities = 0;              // the node's own (device_caps when the driver has them)
+// What one node reported: QUERYCAP, and its compressed formats (single- and multi-planar queues).
+struct V4l2NodeCaps : V4l2NodeInfo {
   std::vector<std::uint32_t> output_formats;   // compressed formats accepted on the OUTPUT queue
   std::vector<std::uint32_t> capture_formats;  // compressed formats given on the CAPTURE queue
 };
-
-// The V4L2 four-character code of a compressed format ("H264", "MPG4", "MPG2").
-std::uint32_t fourcc(const char (&code)[5]);
 
 // True when the node is a memory-to-memory device (single- or multi-planar) that decodes or
 // encodes `format` as asked. Pure, so the rule is testable without devices.
@@ -31,9 +28,10 @@ bool isM2mCodec(const V4l2NodeCaps& node, M2mRole role, std::uint32_t format);
 
 // Asks one node (open, VIDIOC_QUERYCAP, VIDIOC_ENUM_FMT on both queues, close). False when the
 // node cannot be opened or is not a V4L2 device.
-bool queryV4l2Node(const std::string& path, V4l2NodeCaps& caps);
+bool queryV4l2Node(const std::string& path, V4l2NodeCaps& caps, V4l2Io& io = systemV4l2Io());
 
-// Every /dev/video* node that is a memory-to-memory codec for `format` in `role`, sorted by path.
-std::vector<std::string> findM2mCodecNodes(M2mRole role, std::uint32_t format);
+// Every /dev/video* node that is a memory-to-memory codec for `format` in `role`, in node number
+// order (found with forEachV4l2Node, as the cameras are).
+std::vector<std::string> findM2mCodecNodes(M2mRole role, std::uint32_t format, V4l2Io& io = systemV4l2Io());
 
 }  // namespace voca::platform

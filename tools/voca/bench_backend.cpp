@@ -13,7 +13,6 @@
 #include "pipeline/bench/backend_bench.h"
 #include "pipeline/harness/bench_sequence.h"
 #include "platform/machine/cpu_info.h"
-#include "platform/process/child_process.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/backend/estimator.h"
 #include "voca/backend/synthetic.h"
@@ -90,8 +89,8 @@ int runTrackBench(const BackendBenchOptions& opts) {
   if (opts.input.empty()) {
     harness::BenchSequenceSpec spec;
     spec.camera = opts.synth;
-    const std::optional<std::filesystem::path> cached = harness::ensureBenchSequence(
-        spec, harness::benchCacheRoot(), platform::currentExecutable(), true, platform::stopRequested);
+    const std::optional<std::filesystem::path> cached =
+        harness::ensureBenchSequence(spec, harness::benchCacheRoot(), true, platform::stopRequested);
     if (!cached) return platform::interruptedExitCode(platform::stopSignal());
     run.input = *cached;
     if (opts.config.empty()) run.config = harness::benchSequenceConfig(spec);

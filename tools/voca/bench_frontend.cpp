@@ -16,7 +16,6 @@
 #include "pipeline/vo/vo_runner.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/machine/cpu_info.h"
-#include "platform/process/child_process.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
@@ -57,8 +56,8 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
   if (input.empty()) {
     harness::BenchSequenceSpec spec;
     spec.camera = opts.synth;
-    const std::optional<std::filesystem::path> cached = harness::ensureBenchSequence(
-        spec, harness::benchCacheRoot(), platform::currentExecutable(), true, platform::stopRequested);
+    const std::optional<std::filesystem::path> cached =
+        harness::ensureBenchSequence(spec, harness::benchCacheRoot(), true, platform::stopRequested);
     if (!cached) return platform::interruptedExitCode(platform::stopSignal());
     input = *cached;
     if (config.empty()) config = harness::benchSequenceConfig(spec);

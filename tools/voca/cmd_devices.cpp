@@ -13,7 +13,7 @@ namespace {
 int runDevices() {
   std::vector<std::string> skipped;
   const std::vector<voca::capture::V4l2DeviceInfo> cameras =
-      voca::capture::listCameras(voca::capture::systemV4l2Io(), &skipped);
+      voca::capture::listCameras(voca::platform::systemV4l2Io(), &skipped);
   fmt::print("V4L2 cameras:\n");
   if (cameras.empty()) fmt::print("  none found\n");
   fmt::print("{}", voca::capture::formatCameraList(cameras));

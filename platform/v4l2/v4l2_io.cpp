@@ -1,4 +1,4 @@
-#include "drivers/capture/v4l2_io.h"
+#include "platform/v4l2/v4l2_io.h"
 
 #include <fcntl.h>
 #include <sys/ioctl.h>
@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string_view>
 
-namespace voca::capture {
+namespace voca::platform {
 
 namespace {
 
@@ -75,4 +75,11 @@ std::string fourccName(std::uint32_t fourcc) {
   return name;
 }
 
-}  // namespace voca::capture
+std::uint32_t fourcc(const char (&code)[5]) {
+  return static_cast<std::uint32_t>(static_cast<unsigned char>(code[0])) |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(code[1])) << 8 |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(code[2])) << 16 |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(code[3])) << 24;
+}
+
+}  // namespace voca::platform

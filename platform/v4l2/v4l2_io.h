@@ -1,5 +1,5 @@
 #pragma once
-// The thin seam between the V4L2 driver code and the kernel: the six system calls capture needs,
+// The thin seam between the V4L2 code and the kernel: the six system calls capture needs,
 // plus the list of device nodes. The system implementation calls the kernel; tests put an
 // in-process fake device behind the same interface that speaks the real <linux/videodev2.h>
 // protocol. Every call reports failure as the system call does: -1 (MAP_FAILED for mmap) and errno.
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace voca::capture {
+namespace voca::platform {
 
 class V4l2Io {
  public:
@@ -37,4 +37,7 @@ int xioctl(V4l2Io& io, int fd, unsigned long request, void* argument);
 // "YUYV" for V4L2_PIX_FMT_YUYV: the four characters of a fourcc code.
 std::string fourccName(std::uint32_t fourcc);
 
-}  // namespace voca::capture
+// The fourcc code of four characters ("H264", "MPG4", "MPG2"): fourccName's inverse.
+std::uint32_t fourcc(const char (&code)[5]);
+
+}  // namespace voca::platform
