@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <optional>
 #include <set>
+#include <tuple>
 
 #include "tests/test_frontend_support.h"
 #include "voca/frontend/detector.h"
@@ -507,6 +510,97 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
   // In parallel, the wrong-copy matches are rejected by consensus.
   CHECK(parallel.consensus_rejections >= parallel.previous / 2);
   CHECK(parallel.rescued == 0);
+}
+
+TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly predicting blocks count as absent") {
+  // 40 px/frame: only a trusted prior tracks (mode mv falls back to the previous position, which
+  // loses the motion), so what is distrusted shows in both the counter and the tracks.
+  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(40.0, 12.0)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.75f, -0.5f);
+  // `odd` returns a replacement vector for a block at (x, y), or nothing to keep `coded`.
+  const auto run = [&](const FrontendConfig& base, int block_px,
+                       const std::function<std::optional<Eigen::Vector2f>(int, int)>& odd) {
+    FrontendConfig config = base;
+    config.prior_mode = PriorMode::kMv;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    MotionField field(seq.kWidth, seq.kHeight);
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    int correct = 0, in_odd_blocks = 0, visible = 0;
+    for (int k = 0; k < 2; ++k) {
+      seq.render(k);
+      DecodedStereoFrame in = seq.input(k);
+      field.reset(seq.kWidth, seq.kHeight, PictureType::kP);
+      for (int y = 0; y < seq.kHeight; y += block_px) {
+        for (int x = 0; x < seq.kWidth; x += block_px) {
+          const Eigen::Vector2f v = odd(x, y).value_or(coded);
+          field.addBlock(x, y, block_px, block_px, v.x(), v.y());
+        }
+      }
+      field.finalize();
+      in.motion = {field, field};
+      in.has_motion = true;
+      frontend.track(in, frame, stats);
+    }
+    for (const PointTrace& t : frontend.traces(0)) {
+      const Eigen::Vector2f truth = t.previous_px + flow;
+      visible +=
+          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
+      if (t.kept) correct += (t.tracked_px - truth).norm() < 0.1f;
+      const int bx = static_cast<int>(std::lround(t.previous_px.x())) / block_px * block_px;
+      const int by = static_cast<int>(std::lround(t.previous_px.y())) / block_px * block_px;
+      in_odd_blocks += odd(bx, by).has_value();
+    }
+    return std::tuple{stats.temporal[0], correct, in_odd_blocks, visible};
+  };
+  const auto none = [](int, int) { return std::optional<Eigen::Vector2f>(); };
+  const FrontendConfig defaults;
+
+  SUBCASE("all checks off: every vector is used") {
+    const auto [stats, correct, odd_points, visible] = run(defaults, 8, none);
+    REQUIRE(stats.previous >= 20);
+    CHECK(stats.distrusted == 0);
+    CHECK(correct >= visible * 8 / 10);
+  }
+  SUBCASE("prior_min_block_px: 8x8 partitions distrusted at 16, trusted at 8") {
+    FrontendConfig config;
+    config.prior_min_block_px = 16;
+    const auto [stats, correct, odd_points, visible] = run(config, 8, none);
+    REQUIRE(stats.previous >= 20);
+    CHECK(stats.distrusted == stats.with_vector);
+    CHECK(correct <= stats.previous / 4);
+    config.prior_min_block_px = 8;
+    CHECK(std::get<0>(run(config, 8, none)).distrusted == 0);
+  }
+  SUBCASE("prior_reject_inconsistent: a block disagreeing with its neighbours is distrusted, the rest not") {
+    FrontendConfig config;
+    config.prior_reject_inconsistent = true;
+    // One block in every 4x4 group points 20 px the wrong way.
+    const auto wrong = [&](int x, int y) {
+      return x % 64 == 16 && y % 64 == 16 ? std::optional<Eigen::Vector2f>(coded + Eigen::Vector2f(-20.f, 9.f))
+                                          : std::optional<Eigen::Vector2f>();
+    };
+    const auto [stats, correct, odd_points, visible] = run(config, 16, wrong);
+    REQUIRE(stats.previous >= 20);
+    REQUIRE(odd_points >= 1);
+    CHECK(stats.distrusted == odd_points);
+    CHECK(correct >= (visible - odd_points) * 8 / 10);
+  }
+  SUBCASE("prior_max_residual_px: a vector whose prediction does not match is distrusted, a good one kept") {
+    FrontendConfig config;
+    config.prior_max_residual_px = 1.5;
+    const auto good = run(config, 16, none);
+    REQUIRE(std::get<0>(good).previous >= 20);
+    // Distrusted: at most the points the vector moves out of view (no neighbourhood there) and a few.
+    const int leaving = std::get<0>(good).previous - std::get<3>(good);
+    CHECK(std::get<0>(good).distrusted <= leaving + std::get<0>(good).with_vector / 10);
+    CHECK(std::get<1>(good) >= std::get<3>(good) * 8 / 10);
+    const auto off = [&](int, int) { return std::optional<Eigen::Vector2f>(coded + Eigen::Vector2f(-13.f, 7.f)); };
+    const auto bad = run(config, 16, off);
+    CHECK(std::get<0>(bad).distrusted >= std::get<0>(bad).with_vector * 9 / 10);
+  }
 }
 
 TEST_CASE("frontend: constructor and inputs are checked") {

@@ -103,6 +103,12 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   message = errorFor(R"({"frontend": {"presmooth": "yes"}})");
   CHECK(contains(message, "frontend.presmooth: expected true or false"));
 
+  message = errorFor(R"({"frontend": {"prior_min_block_px": 65}})");
+  CHECK(contains(message, "frontend.prior_min_block_px"));
+  message = errorFor(R"({"frontend": {"prior_max_residual_px": -0.5}})");
+  CHECK(contains(message, "frontend.prior_max_residual_px"));
+  message = errorFor(R"({"frontend": {"prior_reject_inconsistent": "yes"}})");
+  CHECK(contains(message, "frontend.prior_reject_inconsistent: expected true or false"));
   message = errorFor(R"({"frontend": {"bridge_iframes": 1}})");
   CHECK(contains(message, "frontend.bridge_iframes: expected true or false"));
 

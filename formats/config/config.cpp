@@ -52,6 +52,9 @@ const FrontendField kFrontendFields[] = {
                                   [] { return "one of " + priorModeList(); }}},
     {"consensus_tolerance_px2", &FrontendConfig::consensus_tolerance_px2},
     {"bridge_iframes", &FrontendConfig::bridge_iframes},
+    {"prior_reject_inconsistent", &FrontendConfig::prior_reject_inconsistent},
+    {"prior_min_block_px", &FrontendConfig::prior_min_block_px},
+    {"prior_max_residual_px", &FrontendConfig::prior_max_residual_px},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
     {"presmooth", &FrontendConfig::presmooth},
 };

@@ -60,6 +60,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
     f.tracked_plain += t.tracked_plain;
     f.tracked_prior += t.tracked_prior;
     f.with_vector += t.with_vector;
+    f.distrusted += t.distrusted;
   }
   f.detected += s.detected;
   f.detected_right_only += s.detected_right_only;

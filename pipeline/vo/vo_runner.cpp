@@ -418,8 +418,11 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
              static_cast<double>(t.right_points) / frames);
   fmt::print(out, "survival frame to frame: {:.1f} % of {} temporal tracks kept (both cameras)\n",
              pct(t.kept, t.previous), t.previous);
-  fmt::print(out, "with motion vector: {:.1f} %; tracked from previous position: {}, from MV prior: {}\n",
-             pct(t.with_vector, t.previous), t.tracked_plain, t.tracked_prior);
+  fmt::print(out, "with motion vector: {:.1f} %{}; tracked from previous position: {}, from MV prior: {}\n",
+             pct(t.with_vector, t.previous),
+             t.distrusted > 0 ? fmt::format(" ({:.1f} % of them distrusted)", pct(t.distrusted, t.with_vector))
+                              : std::string(),
+             t.tracked_plain, t.tracked_prior);
   fmt::print(out,
              "rescued by the prior: {} ({:.2f} per frame); consensus rejections: {} ({:.2f} per frame); bridged "
              "I-frames: {}\n",
@@ -499,6 +502,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"tracked_from_previous", t.tracked_plain},
                    {"tracked_from_prior", t.tracked_prior},
                    {"with_vector", t.with_vector},
+                   {"distrusted_vectors", t.distrusted},
                    {"detected", t.detected},
                    {"detected_right_only", t.detected_right_only},
                    {"stereo_matched", t.stereo_matched},

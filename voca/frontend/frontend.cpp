@@ -75,7 +75,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
     cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
     cam.resetSlots();
-    cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes);
+    cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes, config_.prior_reject_inconsistent);
   }
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
   T_cam1_cam0_ = T_cam0_cam1.inverse();
@@ -179,6 +179,43 @@ const MotionField* KltFrontend::priorField(int camera, const DecodedStereoFrame&
   return cameras_[c].bridge.prior(input.motion[c], input.frames_missing_before, stats.bridged[c]);
 }
 
+bool KltFrontend::trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const {
+  if (config_.prior_reject_inconsistent && block.outlier) return false;
+  const int min_side = config_.prior_min_block_px;
+  if (block.w * block.h < min_side * min_side) return false;
+  if (config_.prior_max_residual_px <= 0.0) return true;
+  // How well the vector predicts the point's 8x8 neighbourhood: the mean absolute difference between
+  // the previous image around p and the current image around p + vector (bilinear), divided by the
+  // neighbourhood's mean gradient. To first order |I(x + e) - I(x)| = |grad I . e|, so the ratio is
+  // the vector's misalignment in pixels whatever the texture's contrast (noise sets a floor).
+  constexpr int kHalf = 4;
+  const FloatView from = cam.prev().level(0);
+  const FloatView to = cam.cur().level(0);
+  const float qx = p.x() + block.dx, qy = p.y() + block.dy;
+  const auto inside = [](const FloatView& image, float x, float y) {
+    return x - kHalf >= 0.f && y - kHalf >= 0.f && x + kHalf + 1.f < static_cast<float>(image.width) &&
+           y + kHalf + 1.f < static_cast<float>(image.height);
+  };
+  if (!inside(from, p.x(), p.y()) || !inside(to, qx, qy)) return false;  // no neighbourhood to compare
+  const auto bilinear = [](const FloatView& image, float x, float y) {
+    const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+    const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
+    const float* r0 = image.row(iy) + ix;
+    const float* r1 = image.row(iy + 1) + ix;
+    return (1.f - fy) * ((1.f - fx) * r0[0] + fx * r0[1]) + fy * ((1.f - fx) * r1[0] + fx * r1[1]);
+  };
+  float residual = 0.f, gradient = 0.f;
+  for (int dy = -kHalf; dy < kHalf; ++dy) {
+    for (int dx = -kHalf; dx < kHalf; ++dx) {
+      const float x = p.x() + static_cast<float>(dx), y = p.y() + static_cast<float>(dy);
+      const float a = bilinear(from, x, y);
+      residual += std::abs(a - bilinear(to, qx + static_cast<float>(dx), qy + static_cast<float>(dy)));
+      gradient += 0.5f * (std::abs(bilinear(from, x + 1.f, y) - a) + std::abs(bilinear(from, x, y + 1.f) - a));
+    }
+  }
+  return residual <= static_cast<float>(config_.prior_max_residual_px) * std::max(gradient, 1.f);
+}
+
 void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendStats& stats) {
   CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
   TemporalStats& ts = stats.temporal[static_cast<std::size_t>(camera)];
@@ -204,9 +241,13 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     const MotionBlock* block = nullptr;
     if (field != nullptr)
       block = field->blockAt(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+    ts.with_vector += block != nullptr;
+    if (block != nullptr && !trustVector(*block, cam, p)) {
+      block = nullptr;
+      ++ts.distrusted;
+    }
     const bool has_vector = block != nullptr;
     const Eigen::Vector2f mv = has_vector ? Eigen::Vector2f(block->dx, block->dy) : zero;
-    ts.with_vector += has_vector;
 
     // The modes differ only in which guesses run and how their results merge.
     bool run_plain = false, run_prior = false, plain_ok = false, prior_ok = false;

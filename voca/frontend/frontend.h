@@ -37,6 +37,7 @@ struct TemporalStats {
   int lost = 0;
   int rescued = 0;  // kept from the prior after the plain track was tried and failed
   int consensus_rejections = 0;
+  int distrusted = 0;  // vectors the codec-confidence checks rejected (counted in with_vector too)
 };
 
 // What one call of KltFrontend::track did.
@@ -134,6 +135,8 @@ class KltFrontend {
                      std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
+  // The codec-confidence checks of the config's prior_* keys on the vector found at p.
+  bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
   void detectRightOnly(const DecodedStereoFrame& input, FrontendStats& stats);
   // Right-image grid cells that the left camera sees (blocked for right-only detection).

@@ -89,6 +89,8 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkInt(context, "detection_min_threshold", c.detection_min_threshold, 1, c.detection_max_threshold);
   checkInt(context, "detection_border_px", c.detection_border_px, 3, 1000);
   checkReal(context, "consensus_tolerance_px2", c.consensus_tolerance_px2, 0.0, 1e4, false);
+  checkInt(context, "prior_min_block_px", c.prior_min_block_px, 0, 64);
+  checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
 }
 
 }  // namespace voca

@@ -52,6 +52,21 @@ struct FrontendConfig {
   PriorMode prior_mode = PriorMode::kMvParallelOf;
   double consensus_tolerance_px2 = 0.05;
   bool bridge_iframes = true;  // reuse the last P-frame's motion on I-frames
+  // Codec confidence: which motion vectors the prior trusts. A distrusted vector is treated as
+  // absent (the point is tracked as in mode none). All off by default.
+  //  - prior_reject_inconsistent: vectors that deviate from their 24 px neighbourhood's median by
+  //    more than max(2 px, half its length) (MotionField::flagOutliers): isolated wrong matches of
+  //    the encoder's search, typical on blur and repetitive texture.
+  //  - prior_min_block_px: vectors of partitions smaller than this side (area below its square);
+  //    small partitions are where the encoder's rate-distortion choice tracked noise.
+  //  - prior_max_residual_px: vectors whose motion-compensated prediction explains the point's 8x8
+  //    neighbourhood poorly: mean absolute difference between the previous image at the point and
+  //    the current image at the point plus the vector, over the neighbourhood's mean gradient, i.e.
+  //    the vector's apparent misalignment in pixels (0 = off). The decoded images' stand-in for the
+  //    residual energy the bitstream carries but FFmpeg does not export.
+  bool prior_reject_inconsistent = false;
+  int prior_min_block_px = 0;
+  double prior_max_residual_px = 0.0;
   // Also detect in the right image where the left camera does not see (cells whose reprojection
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).

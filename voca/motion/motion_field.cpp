@@ -204,11 +204,14 @@ int MotionField::flagOutliers(const OutlierParams& params) {
 
 const MotionField* IFrameBridge::prior(const MotionField& field, int frames_missing_before, bool& bridged) {
   if (field.hasVectors()) {
-    if (enabled_) {
+    if (enabled_ || flag_outliers_) {
       last_.copyFrom(field);
-      have_last_ = true;
+      have_last_ = enabled_;
     }
-    return frames_missing_before == 0 ? &field : nullptr;
+    if (frames_missing_before > 0) return nullptr;
+    if (!flag_outliers_) return &field;
+    last_.flagOutliers();
+    return &last_;
   }
   if (frames_missing_before > 0) return nullptr;
   if (enabled_ && have_last_ && field.pictureType() == PictureType::kI) {

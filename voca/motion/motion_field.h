@@ -124,8 +124,11 @@ class MotionField {
 class IFrameBridge {
  public:
   IFrameBridge() = default;
-  // enabled = false: a frame's own vectors or none, nothing is carried over.
-  IFrameBridge(int max_width, int max_height, bool enabled = true) : last_(max_width, max_height), enabled_(enabled) {}
+  // enabled = false: a frame's own vectors or none, nothing is carried over. flag_outliers: every
+  // field handed out has its blocks flagged by MotionField::flagOutliers (on a copy; the input stays
+  // untouched), so a consumer can distrust vectors that disagree with their neighbourhood.
+  IFrameBridge(int max_width, int max_height, bool enabled = true, bool flag_outliers = false)
+      : last_(max_width, max_height), enabled_(enabled), flag_outliers_(flag_outliers) {}
 
   // The field whose vectors give this frame's motion from the previous frame the tracker saw:
   //  - the frame's own field when it has vectors (and, when enabled, remembered for later I-frames,
@@ -142,6 +145,7 @@ class IFrameBridge {
   MotionField last_;
   bool have_last_ = false;
   bool enabled_ = true;
+  bool flag_outliers_ = false;
 };
 
 }  // namespace voca
