@@ -9,7 +9,6 @@
 #include <map>
 #include <optional>
 #include <set>
-#include <tuple>
 
 #include "tests/test_frontend_support.h"
 #include "voca/frontend/detector.h"
@@ -519,6 +518,12 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
   const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
   const Eigen::Vector2f flow = seq.flow.cast<float>();
   const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.75f, -0.5f);
+  struct Outcome {
+    TemporalStats stats;
+    int correct = 0;        // kept points within 0.1 px of the true position
+    int in_odd_blocks = 0;  // previous points in a block whose vector `odd` replaced
+    int visible = 0;        // previous points whose true position stays inside the image
+  };
   // `odd` returns a replacement vector for a block at (x, y), or nothing to keep `coded`.
   const auto run = [&](const FrontendConfig& base, int block_px,
                        const std::function<std::optional<Eigen::Vector2f>(int, int)>& odd) {
@@ -553,7 +558,7 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
       const int by = static_cast<int>(std::lround(t.previous_px.y())) / block_px * block_px;
       in_odd_blocks += odd(bx, by).has_value();
     }
-    return std::tuple{stats.temporal[0], correct, in_odd_blocks, visible};
+    return Outcome{stats.temporal[0], correct, in_odd_blocks, visible};
   };
   const auto none = [](int, int) { return std::optional<Eigen::Vector2f>(); };
   const FrontendConfig defaults;
@@ -572,7 +577,7 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
     CHECK(stats.distrusted == stats.with_vector);
     CHECK(correct <= stats.previous / 4);
     config.prior_min_block_px = 8;
-    CHECK(std::get<0>(run(config, 8, none)).distrusted == 0);
+    CHECK(run(config, 8, none).stats.distrusted == 0);
   }
   SUBCASE("prior_reject_inconsistent: a block disagreeing with its neighbours is distrusted, the rest not") {
     FrontendConfig config;
@@ -592,14 +597,14 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
     FrontendConfig config;
     config.prior_max_residual_px = 1.5;
     const auto good = run(config, 16, none);
-    REQUIRE(std::get<0>(good).previous >= 20);
+    REQUIRE(good.stats.previous >= 20);
     // Distrusted: at most the points the vector moves out of view (no neighbourhood there) and a few.
-    const int leaving = std::get<0>(good).previous - std::get<3>(good);
-    CHECK(std::get<0>(good).distrusted <= leaving + std::get<0>(good).with_vector / 10);
-    CHECK(std::get<1>(good) >= std::get<3>(good) * 8 / 10);
+    const int leaving = good.stats.previous - good.visible;
+    CHECK(good.stats.distrusted <= leaving + good.stats.with_vector / 10);
+    CHECK(good.correct >= good.visible * 8 / 10);
     const auto off = [&](int, int) { return std::optional<Eigen::Vector2f>(coded + Eigen::Vector2f(-13.f, 7.f)); };
     const auto bad = run(config, 16, off);
-    CHECK(std::get<0>(bad).distrusted >= std::get<0>(bad).with_vector * 9 / 10);
+    CHECK(bad.stats.distrusted >= bad.stats.with_vector * 9 / 10);
   }
 }
 

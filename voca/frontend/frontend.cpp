@@ -197,20 +197,14 @@ bool KltFrontend::trustVector(const MotionBlock& block, const CameraState& cam, 
            y + kHalf + 1.f < static_cast<float>(image.height);
   };
   if (!inside(from, p.x(), p.y()) || !inside(to, qx, qy)) return false;  // no neighbourhood to compare
-  const auto bilinear = [](const FloatView& image, float x, float y) {
-    const int ix = static_cast<int>(x), iy = static_cast<int>(y);
-    const float fx = x - static_cast<float>(ix), fy = y - static_cast<float>(iy);
-    const float* r0 = image.row(iy) + ix;
-    const float* r1 = image.row(iy + 1) + ix;
-    return (1.f - fy) * ((1.f - fx) * r0[0] + fx * r0[1]) + fy * ((1.f - fx) * r1[0] + fx * r1[1]);
-  };
   float residual = 0.f, gradient = 0.f;
   for (int dy = -kHalf; dy < kHalf; ++dy) {
     for (int dx = -kHalf; dx < kHalf; ++dx) {
       const float x = p.x() + static_cast<float>(dx), y = p.y() + static_cast<float>(dy);
-      const float a = bilinear(from, x, y);
-      residual += std::abs(a - bilinear(to, qx + static_cast<float>(dx), qy + static_cast<float>(dy)));
-      gradient += 0.5f * (std::abs(bilinear(from, x + 1.f, y) - a) + std::abs(bilinear(from, x, y + 1.f) - a));
+      const float a = sampleBilinear(from, x, y);
+      residual += std::abs(a - sampleBilinear(to, qx + static_cast<float>(dx), qy + static_cast<float>(dy)));
+      gradient +=
+          0.5f * (std::abs(sampleBilinear(from, x + 1.f, y) - a) + std::abs(sampleBilinear(from, x, y + 1.f) - a));
     }
   }
   return residual <= static_cast<float>(config_.prior_max_residual_px) * std::max(gradient, 1.f);
