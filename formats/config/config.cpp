@@ -59,10 +59,15 @@ const FrontendField kFrontendFields[] = {
     {"presmooth", &FrontendConfig::presmooth},
 };
 
-void requireObject(const json& value, const std::string& context) {
-  if (!value.is_object())
-    throw InputError(fmt::format("{}: expected a JSON object, got {}", context, value.type_name()));
-}
+// The file's top level: one section per component.
+const ConfigField<VocaConfig> kConfigSections[] = {
+    {"frontend", ConfigReader<VocaConfig>{[](VocaConfig& c, const ConfigValue& value, const std::string& where) {
+       c.frontend = parseFrontendConfig(value.json(), where);
+     }}},
+    {"backend", ConfigReader<VocaConfig>{[](VocaConfig& c, const ConfigValue& value, const std::string& where) {
+       c.backend = parseBackendConfig(value.json(), where);
+     }}},
+};
 
 }  // namespace
 
@@ -81,17 +86,8 @@ BackendConfig parseBackendConfig(const json& section, const std::string& context
 }
 
 VocaConfig parseConfig(const json& root, const std::string& context) {
-  requireObject(root, context);
   VocaConfig config;
-  for (const auto& [key, value] : root.items()) {
-    if (key == "frontend") {
-      config.frontend = parseFrontendConfig(value, context + ": frontend");
-    } else if (key == "backend") {
-      config.backend = parseBackendConfig(value, context + ": backend");
-    } else {
-      throw InputError(fmt::format("{}: unknown top-level key \"{}\" (known: frontend, backend)", context, key));
-    }
-  }
+  readConfigFile<VocaConfig>(root, context, kConfigSections, config, {});
   return config;
 }
 

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "drivers/encode/video_encoder.h"
+#include "formats/config/config_section.h"
 #include "voca/core/error.h"
 #include "voca/frontend/frontend_config.h"
 
@@ -18,37 +19,13 @@ using nlohmann::json;
 
 namespace {
 
-constexpr const char* kSuiteKeys =
-    "name, sequences, bitrates, modes, bridging, configs, frames, encode_fps, decoded_png, run_args, rules, external";
-constexpr const char* kSequenceKeys = "name, path, synth, calib, gt, config, encoded, optional";
-constexpr const char* kRulesKeys = "ate_divergence_m, rte_divergence_m, min_reset_free_fraction";
-constexpr const char* kExternalKeys = "system, sequence, bitrate, trajectory";
-
 [[noreturn]] void fail(const std::string& where, const std::string& what) {
   throw InputError(fmt::format("{}: {}", where, what));
 }
 
-std::string readString(const json& value, const std::string& where) {
-  if (!value.is_string()) fail(where, fmt::format("expected a string, got {}", value.dump()));
-  return value.get<std::string>();
-}
-
-std::vector<std::string> readStrings(const json& value, const std::string& where) {
-  if (!value.is_array() || value.empty()) fail(where, "expected a non-empty array of strings");
-  std::vector<std::string> result;
-  for (std::size_t i = 0; i < value.size(); ++i)
-    result.push_back(readString(value[i], fmt::format("{}[{}]", where, i)));
-  return result;
-}
-
-double readPositive(const json& value, const std::string& where) {
-  if (!value.is_number() || value.get<double>() <= 0.0) fail(where, fmt::format("expected a positive number"));
-  return value.get<double>();
-}
-
 // Names become folder names and table labels: keep them plain.
-std::string readName(const json& value, const std::string& where) {
-  const std::string name = readString(value, where);
+std::string readName(const ConfigValue& value, const std::string& where) {
+  const std::string name = value.string(where);
   if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
                           std::string::npos) {
     fail(where, fmt::format("\"{}\": expected letters, digits, '_', '.' or '-'", name));
@@ -56,49 +33,43 @@ std::string readName(const json& value, const std::string& where) {
   return name;
 }
 
-fs::path resolve(const fs::path& base, const std::string& text) {
-  const fs::path path(text);
-  return (path.is_absolute() ? path : base / path).lexically_normal();
-}
+template <class Config>
+using Reader = ConfigReader<Config>;
 
-SuiteSequence parseSequence(const json& value, const fs::path& base, const std::string& where) {
-  if (!value.is_object()) fail(where, "expected an object with \"name\" and \"path\" or \"synth\"");
-  SuiteSequence sequence;
-  std::optional<std::string> path;
-  for (const auto& [key, item] : value.items()) {
-    const std::string at = where + "." + key;
-    if (key == "name") {
-      sequence.name = readName(item, at);
-    } else if (key == "path") {
-      path = readString(item, at);
-    } else if (key == "synth") {
-      sequence.synth_args = readStrings(item, at);
-    } else if (key == "calib") {
-      sequence.calibration = resolve(base, readString(item, at));
-    } else if (key == "gt") {
-      sequence.ground_truth = resolve(base, readString(item, at));
-    } else if (key == "config") {
-      sequence.config = readString(item, at);
-    } else if (key == "encoded") {
-      if (!item.is_object())
-        fail(at, "expected an object: bitrate -> VOCA video folder, e.g. {\"500k\": \"V101-500k\"}");
-      for (const auto& [bitrate, folder] : item.items()) {
-        const std::string label = normaliseBitrate(bitrate, at);
-        if (label == "raw") fail(at, "\"raw\" is the dataset itself, not an encoding");
-        sequence.encoded[label] = resolve(base, readString(folder, at + "." + bitrate));
-      }
-    } else if (key == "optional") {
-      if (!item.is_boolean()) fail(at, "expected true or false");
-      sequence.optional = item.get<bool>();
-    } else {
-      fail(at, fmt::format("unknown key (known: {})", kSequenceKeys));
-    }
-  }
+const ConfigField<SuiteSequence> kSequenceFields[] = {
+    {"name", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       s.name = readName(v, at);
+     }}},
+    {"path",
+     Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) { s.path = v.path(at); }}},
+    {"synth", &SuiteSequence::synth_args},
+    {"calib", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       s.calibration = v.path(at);
+     }}},
+    {"gt", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       s.ground_truth = v.path(at);
+     }}},
+    {"config", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       s.config = v.string(at);
+     }}},
+    {"encoded", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       if (!v.json().is_object())
+         fail(at, "expected an object: bitrate -> VOCA video folder, e.g. {\"500k\": \"V101-500k\"}");
+       for (const auto& [bitrate, folder] : v.json().items()) {
+         const std::string label = normaliseBitrate(bitrate, at);
+         if (label == "raw") fail(at, "\"raw\" is the dataset itself, not an encoding");
+         s.encoded[label] = ConfigValue(folder, v.baseDir()).path(at + "." + bitrate);
+       }
+     }}},
+    {"optional", &SuiteSequence::optional},
+};
+
+// Checks what the table cannot: one of path and synth, no --out, files that must exist.
+void checkSequence(const SuiteSequence& sequence, const std::string& where) {
   if (sequence.name.empty()) fail(where, "missing \"name\"");
-  if (path.has_value() == !sequence.synth_args.empty()) {
+  if (sequence.path.empty() == sequence.synth_args.empty()) {
     fail(where, "give either \"path\" (a dataset folder) or \"synth\" (arguments of `voca synth`)");
   }
-  if (path) sequence.path = resolve(base, *path);
   for (const std::string& arg : sequence.synth_args) {
     if (arg == "--out") fail(where + ".synth", "leave out --out: the suite chooses where the sequence is rendered");
   }
@@ -113,50 +84,99 @@ SuiteSequence parseSequence(const json& value, const fs::path& base, const std::
   if (sequence.ground_truth && !fs::exists(*sequence.ground_truth) && !sequence.optional) {
     fail(where + ".gt", fmt::format("{} does not exist", sequence.ground_truth->string()));
   }
-  return sequence;
 }
 
-TableRules parseRules(const json& value, const std::string& where) {
-  if (!value.is_object()) fail(where, fmt::format("expected an object with {}", kRulesKeys));
-  TableRules rules;
-  for (const auto& [key, item] : value.items()) {
-    const std::string at = where + "." + key;
-    if (key == "ate_divergence_m") {
-      rules.ate_divergence_m = readPositive(item, at);
-    } else if (key == "rte_divergence_m") {
-      rules.rte_divergence_m = readPositive(item, at);
-    } else if (key == "min_reset_free_fraction") {
-      if (!item.is_number() || item.get<double>() < 0.0 || item.get<double>() >= 1.0) fail(at, "expected 0 <= x < 1");
-      rules.min_reset_free_fraction = item.get<double>();
-    } else {
-      fail(at, fmt::format("unknown key (known: {})", kRulesKeys));
-    }
+// The thresholds' open bounds are checked after reading (ranges in the table are closed).
+const ConfigField<TableRules> kRulesFields[] = {
+    {"ate_divergence_m", &TableRules::ate_divergence_m},
+    {"rte_divergence_m", &TableRules::rte_divergence_m},
+    {"min_reset_free_fraction", &TableRules::min_reset_free_fraction},
+};
+
+void checkRules(const TableRules& rules, const std::string& where) {
+  if (!(rules.ate_divergence_m > 0.0)) fail(where + ".ate_divergence_m", "expected a positive number");
+  if (!(rules.rte_divergence_m > 0.0)) fail(where + ".rte_divergence_m", "expected a positive number");
+  if (!(rules.min_reset_free_fraction >= 0.0 && rules.min_reset_free_fraction < 1.0)) {
+    fail(where + ".min_reset_free_fraction", "expected 0 <= x < 1");
   }
-  return rules;
 }
 
-ExternalRun parseExternal(const json& value, const fs::path& base, const std::string& where) {
-  if (!value.is_object()) fail(where, fmt::format("expected an object with {}", kExternalKeys));
-  ExternalRun run;
-  for (const auto& [key, item] : value.items()) {
-    const std::string at = where + "." + key;
-    if (key == "system") {
-      run.system = readString(item, at);
-    } else if (key == "sequence") {
-      run.sequence = readString(item, at);
-    } else if (key == "bitrate") {
-      run.bitrate = normaliseBitrate(readString(item, at), at);
-    } else if (key == "trajectory") {
-      run.trajectory = resolve(base, readString(item, at));
-    } else {
-      fail(at, fmt::format("unknown key (known: {})", kExternalKeys));
-    }
-  }
-  if (run.system.empty() || run.sequence.empty() || run.trajectory.empty()) {
-    fail(where, "needs \"system\", \"sequence\" and \"trajectory\"");
-  }
-  return run;
-}
+const ConfigField<ExternalRun> kExternalFields[] = {
+    {"system", &ExternalRun::system},
+    {"sequence", &ExternalRun::sequence},
+    {"bitrate", Reader<ExternalRun>{[](ExternalRun& r, const ConfigValue& v, const std::string& at) {
+       r.bitrate = normaliseBitrate(v.string(at), at);
+     }}},
+    {"trajectory", Reader<ExternalRun>{[](ExternalRun& r, const ConfigValue& v, const std::string& at) {
+       r.trajectory = v.path(at);
+     }}},
+};
+
+const ConfigField<Suite> kSuiteFields[] = {
+    {"name", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) { s.name = readName(v, at); }}},
+    {"sequences", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       v.forEachItem(at, [&](const ConfigValue& item, const std::string& item_at) {
+         SuiteSequence sequence;
+         item.readSection<SuiteSequence>(item_at, kSequenceFields, sequence);
+         checkSequence(sequence, item_at);
+         if (sequence.synth_args.empty() && !fs::is_directory(sequence.path)) {
+           if (!sequence.optional) {
+             fail(item_at + ".path",
+                  fmt::format("{} is not a folder (mark the sequence \"optional\": true to skip it when missing)",
+                              sequence.path.string()));
+           }
+           s.notes.push_back(
+               fmt::format("sequence {} skipped: {} does not exist", sequence.name, sequence.path.string()));
+           return;
+         }
+         s.sequences.push_back(std::move(sequence));
+       });
+     }}},
+    {"bitrates", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       s.bitrates.clear();
+       for (const std::string& text : v.strings(at)) s.bitrates.push_back(normaliseBitrate(text, at));
+     }}},
+    {"modes", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       s.modes = v.strings(at);
+       for (const std::string& mode : s.modes) requirePriorMode(mode, at);
+     }}},
+    {"bridging", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       s.bridging.clear();
+       v.forEachItem(at, [&](const ConfigValue& item, const std::string& item_at) {
+         s.bridging.push_back(item.boolean(item_at));
+       });
+     }}},
+    {"configs", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       s.configs.clear();
+       v.forEachItem(at, [&](const ConfigValue& item, const std::string& item_at) {
+         // A file is resolved like every path; a shipped name (euroc, tumvi, kitti) has no extension.
+         const std::string config = item.string(item_at);
+         s.configs.push_back(fs::path(config).has_extension() ? item.path(item_at).string() : config);
+       });
+     }}},
+    {"frames", &Suite::frames, 0.0, static_cast<double>(kConfigIntLimit)},
+    {"encode_fps", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       s.encode_fps = v.json().is_number_integer() ? std::to_string(v.json().get<int>()) : v.string(at);
+     }}},
+    {"decoded_png", &Suite::decoded_png},
+    {"run_args", &Suite::run_args},
+    {"rules", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       v.readSection<TableRules>(at, kRulesFields, s.rules);
+       checkRules(s.rules, at);
+     }}},
+    {"external", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
+       if (!v.json().is_array()) fail(at, fmt::format("expected an array, got {}", v.json().dump()));
+       if (v.json().empty()) return;
+       v.forEachItem(at, [&](const ConfigValue& item, const std::string& item_at) {
+         ExternalRun run;
+         item.readSection<ExternalRun>(item_at, kExternalFields, run);
+         if (run.system.empty() || run.sequence.empty() || run.trajectory.empty()) {
+           fail(item_at, "needs \"system\", \"sequence\" and \"trajectory\"");
+         }
+         s.external.push_back(std::move(run));
+       });
+     }}},
+};
 
 // A config's short name for labels and folders: a shipped name as is, a file by its stem.
 std::string configLabel(const std::string& config) {
@@ -176,72 +196,11 @@ std::string normaliseBitrate(const std::string& text, const std::string& context
 }
 
 Suite parseSuite(const json& root, const fs::path& base, const std::string& context) {
-  if (!root.is_object()) fail(context, "expected a JSON object");
   Suite suite;
-  bool have_sequences = false;
-  for (const auto& [key, value] : root.items()) {
-    const std::string at = context + ": " + key;
-    if (key == "name") {
-      suite.name = readName(value, at);
-    } else if (key == "sequences") {
-      if (!value.is_array() || value.empty()) fail(at, "expected a non-empty array of sequences");
-      have_sequences = true;
-      for (std::size_t i = 0; i < value.size(); ++i) {
-        SuiteSequence sequence = parseSequence(value[i], base, fmt::format("{}[{}]", at, i));
-        if (sequence.synth_args.empty() && !fs::is_directory(sequence.path)) {
-          if (sequence.optional) {
-            suite.notes.push_back(
-                fmt::format("sequence {} skipped: {} does not exist", sequence.name, sequence.path.string()));
-            continue;
-          }
-          fail(fmt::format("{}[{}].path", at, i),
-               fmt::format("{} is not a folder (mark the sequence \"optional\": true to skip it when missing)",
-                           sequence.path.string()));
-        }
-        suite.sequences.push_back(std::move(sequence));
-      }
-    } else if (key == "bitrates") {
-      suite.bitrates.clear();
-      for (const std::string& text : readStrings(value, at)) suite.bitrates.push_back(normaliseBitrate(text, at));
-    } else if (key == "modes") {
-      suite.modes = readStrings(value, at);
-      for (const std::string& mode : suite.modes) requirePriorMode(mode, at);
-    } else if (key == "bridging") {
-      if (!value.is_array() || value.empty()) fail(at, "expected a non-empty array of true/false");
-      suite.bridging.clear();
-      for (const json& item : value) {
-        if (!item.is_boolean()) fail(at, "expected true or false");
-        suite.bridging.push_back(item.get<bool>());
-      }
-    } else if (key == "configs") {
-      suite.configs.clear();
-      for (const std::string& config : readStrings(value, at)) {
-        // A file is resolved like every path; a shipped name (euroc, tumvi, kitti) has no extension.
-        suite.configs.push_back(fs::path(config).has_extension() ? resolve(base, config).string() : config);
-      }
-    } else if (key == "frames") {
-      if (!value.is_number_integer() || value.get<int>() < 0) fail(at, "expected 0 (all) or a positive frame count");
-      suite.frames = value.get<int>();
-    } else if (key == "encode_fps") {
-      suite.encode_fps = value.is_number_integer() ? std::to_string(value.get<int>()) : readString(value, at);
-    } else if (key == "decoded_png") {
-      if (!value.is_boolean()) fail(at, "expected true or false");
-      suite.decoded_png = value.get<bool>();
-    } else if (key == "run_args") {
-      suite.run_args = readStrings(value, at);
-    } else if (key == "rules") {
-      suite.rules = parseRules(value, at);
-    } else if (key == "external") {
-      if (!value.is_array()) fail(at, "expected an array");
-      for (std::size_t i = 0; i < value.size(); ++i) {
-        suite.external.push_back(parseExternal(value[i], base, fmt::format("{}[{}]", at, i)));
-      }
-    } else {
-      fail(at, fmt::format("unknown key (known: {})", kSuiteKeys));
-    }
+  readConfigFile<Suite>(root, context, kSuiteFields, suite, base);
+  if (suite.sequences.empty()) {
+    fail(context, suite.notes.empty() ? "missing \"sequences\"" : "none of the sequences exists");
   }
-  if (!have_sequences) fail(context, "missing \"sequences\"");
-  if (suite.sequences.empty()) fail(context, "none of the sequences exists");
   std::set<std::string> names;
   for (const SuiteSequence& sequence : suite.sequences) {
     if (!names.insert(sequence.name).second) fail(context, fmt::format("two sequences are named {}", sequence.name));

@@ -30,7 +30,7 @@ constexpr double kTargetMedianMs = 4.0;  // issue 15: per stereo frame on one co
 struct BackendBenchOptions {
   std::string input;            // dataset or video folder; empty: the cached moving sequence
   std::string synth = "euroc";  // which cached sequence
-  std::string calib, config, mode = "mv_parallel_of";
+  std::string calib, config, mode{priorModeName(PriorMode::kMvParallelOf)};
   int frames = 0;
   int warmup = 40;
   bool synthetic = false;

@@ -1,8 +1,9 @@
 #pragma once
 // The keys of a config section, listed once per component as a table of ConfigField: the JSON name,
 // the struct member it fills and, for numbers, the closed range it must lie in. The one parser
-// (config_section.h, with JSON) reads any section through such a table, so every section gives the
-// same errors; this header stays free of JSON so a component's public API does not carry it.
+// (formats/config/config_section.h, with JSON) reads any section of any file (the VOCA config, a
+// benchmark suite) through such a table, so every section gives the same errors; this header stays
+// free of JSON so a component's public API does not carry it.
 
 #include <fmt/core.h>
 
@@ -12,10 +13,14 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "voca/core/error.h"
 
 namespace voca {
+
+// One JSON value of a config file, as a ConfigReader sees it; defined with the parser.
+class ConfigValue;
 
 // A string key that names one value of a fixed set (an enum member).
 template <class Config>
@@ -24,9 +29,18 @@ struct ConfigChoice {
   std::string (*expected)();  // what the names are, for "expected <this>, got "x"", e.g. "a or b"
 };
 
+// A key whose value has structure (a nested section, an array of sections, a path relative to the
+// file, a string with its own grammar): read by a function that reports errors at `where`.
+template <class Config>
+struct ConfigReader {
+  void (*read)(Config& config, const ConfigValue& value, const std::string& where);
+};
+
 template <class Config>
 struct ConfigField {
-  using Target = std::variant<int Config::*, double Config::*, bool Config::*, ConfigChoice<Config>>;
+  // A list of strings must be a non-empty array.
+  using Target = std::variant<int Config::*, double Config::*, bool Config::*, std::string Config::*,
+                              std::vector<std::string> Config::*, ConfigChoice<Config>, ConfigReader<Config>>;
 
   std::string_view name;
   Target target;
@@ -49,15 +63,20 @@ std::string configFieldNames(std::span<const ConfigField<Config>> fields) {
   return names;
 }
 
-// InputError "<context>.<key>: expected a value in [min, max], got v" when a number lies outside its
-// field's range (NaN and infinities never pass).
+// InputError "<where>: expected a value in [min, max], got v" when a number lies outside its field's
+// range (NaN and infinities never pass); `where` is the key's full path, e.g. "x.json: backend.max_frames".
 template <class Config>
-void checkConfigRange(const ConfigField<Config>& field, double value, const std::string& context) {
+void checkConfigRangeAt(const ConfigField<Config>& field, double value, const std::string& where) {
   if (!field.hasRange()) return;
   if (!(value >= field.min && value <= field.max) || !std::isfinite(value)) {
-    throw InputError(
-        fmt::format("{}.{}: expected a value in [{}, {}], got {}", context, field.name, field.min, field.max, value));
+    throw InputError(fmt::format("{}: expected a value in [{}, {}], got {}", where, field.min, field.max, value));
   }
+}
+
+// The same for a key of the section named `context` ("<context>.<key>").
+template <class Config>
+void checkConfigRange(const ConfigField<Config>& field, double value, const std::string& context) {
+  checkConfigRangeAt(field, value, fmt::format("{}.{}", context, field.name));
 }
 
 // Checks every ranged number of `config` against its table, in table order.
