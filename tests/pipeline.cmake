@@ -14,3 +14,5 @@ voca_add_test(test_pipeline_alloc SOURCES test_pipeline_alloc.cpp
 # many packets (stream joined after its keyframe, lost packets): every slot comes back, no hang.
 voca_add_test(test_decode_stage SOURCES test_decode_stage.cpp
               LIBS voca_pipeline_stages voca_drivers_encode LABELS asan TIMEOUT 120)
+# The visualisations (track overlay, motion-vector plot) on known inputs.
+voca_add_test(test_overlay SOURCES test_overlay.cpp LIBS voca_pipeline_sinks LABELS asan)

@@ -100,3 +100,19 @@ TEST_CASE("drawArrow, drawCross and drawCircle stay where they are put") {
   CHECK(inked(image, 14, 10));
   CHECK(inked(image, 10, 14));
 }
+
+TEST_CASE("grayToRgb: every pixel becomes its gray level in all three channels") {
+  voca::GrayImage gray(5, 3);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 5; ++x) gray(x, y) = static_cast<std::uint8_t>(40 * y + 7 * x);
+  voca::RgbImage rgb;
+  voca::grayToRgb(gray, rgb);
+  REQUIRE(rgb.width() == 5);
+  REQUIRE(rgb.height() == 3);
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      const std::uint8_t v = gray(x, y);
+      CHECK((rgb(x, y).r == v && rgb(x, y).g == v && rgb(x, y).b == v));
+    }
+  }
+}

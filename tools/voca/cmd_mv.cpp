@@ -17,15 +17,14 @@
 #include "drivers/encode/rgb_video_writer.h"
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
+#include "pipeline/sinks/overlay_sink.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
-#include "voca/image/draw.h"
 #include "voca/motion/motion_field.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using voca::Rgb8;
 using voca::RgbImage;
 
 struct MvOptions {
@@ -68,40 +67,6 @@ FrameRange parseFrameRange(const std::string& text) {
   parse(std::string_view(text).substr(colon + 1), range.end);
   if (range.end <= range.first) throw voca::InputError("--frames '" + text + "': the range is empty");
   return range;
-}
-
-constexpr Rgb8 kPartitionColour{70, 110, 200};
-constexpr Rgb8 kVectorColour{40, 230, 60};
-constexpr Rgb8 kOutlierColour{255, 40, 40};
-
-void render(const voca::decode::DecodedFrame& frame, float arrow_scale, RgbImage& out) {
-  const voca::GrayImage& luma = frame.luma;
-  out.resize(luma.width(), luma.height());
-  for (int y = 0; y < luma.height(); ++y) {
-    for (int x = 0; x < luma.width(); ++x) {
-      const std::uint8_t v = luma(x, y);
-      out(x, y) = Rgb8{v, v, v};
-    }
-  }
-  // Partitions first (top and left edge of every block, so shared edges are drawn once), then the
-  // vectors on top; outliers last so they stay visible.
-  for (const voca::MotionBlock& b : frame.motion.blocks()) {
-    if (b.ref != voca::RefDirection::kPast) continue;
-    for (int x = b.x; x < b.x + b.w; ++x) voca::putPixel(out, x, b.y, kPartitionColour);
-    for (int y = b.y; y < b.y + b.h; ++y) voca::putPixel(out, b.x, y, kPartitionColour);
-  }
-  for (const bool outliers : {false, true}) {
-    for (const voca::MotionBlock& b : frame.motion.blocks()) {
-      if (b.ref != voca::RefDirection::kPast || b.outlier != outliers) continue;
-      const float cx = b.centreX(), cy = b.centreY();
-      const Rgb8 colour = outliers ? kOutlierColour : kVectorColour;
-      if (b.dx == 0.f && b.dy == 0.f) {
-        voca::putPixel(out, static_cast<int>(std::lround(cx)), static_cast<int>(std::lround(cy)), colour);
-      } else {
-        voca::drawArrow(out, {cx, cy}, {cx + arrow_scale * b.dx, cy + arrow_scale * b.dy}, colour);
-      }
-    }
-  }
 }
 
 int runMv(const MvOptions& opts) {
@@ -152,7 +117,7 @@ int runMv(const MvOptions& opts) {
     const int outliers = frame.motion.flagOutliers(opts.outliers);
     total_vectors += static_cast<std::int64_t>(frame.motion.blocks().size());
     total_outliers += outliers;
-    render(frame, opts.arrow_scale, canvas);
+    voca::pipeline::renderMotionOverlay(frame.luma, frame.motion, opts.arrow_scale, canvas);
     if (video) {
       video->write(canvas.view());
     } else {

@@ -12,6 +12,16 @@ int nearestPixel(float v) { return static_cast<int>(std::lround(v)); }
 
 }  // namespace
 
+void grayToRgb(const GrayImage& gray, RgbImage& out) {
+  out.resize(gray.width(), gray.height());
+  for (int y = 0; y < gray.height(); ++y) {
+    for (int x = 0; x < gray.width(); ++x) {
+      const std::uint8_t v = gray(x, y);
+      out(x, y) = Rgb8{v, v, v};
+    }
+  }
+}
+
 void putPixel(RgbImage& image, int x, int y, Rgb8 colour) {
   if (x >= 0 && y >= 0 && x < image.width() && y < image.height()) image(x, y) = colour;
 }

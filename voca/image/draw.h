@@ -8,6 +8,9 @@
 
 namespace voca {
 
+// The gray image as RGB (out resized to it): the canvas every visualisation draws on.
+void grayToRgb(const GrayImage& gray, RgbImage& out);
+
 // Sets one pixel if it lies inside the image.
 void putPixel(RgbImage& image, int x, int y, Rgb8 colour);
 
