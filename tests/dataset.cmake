@@ -1,4 +1,4 @@
 # Dataset folders: layouts, frame pairing, errors for malformed folders, and the EuRoC writer.
-voca_add_test(test_dataset SOURCES test_dataset.cpp LIBS voca_formats_dataset voca_formats_image LABELS asan)
+voca_add_test(test_dataset SOURCES test_dataset.cpp LIBS voca_formats_dataset voca_formats_image fmt::fmt LABELS asan)
 # The same readers on the real EuRoC and KITTI excerpts in ../shared/data.
 voca_add_test(test_dataset_data SOURCES test_dataset_data.cpp LIBS voca_formats_dataset voca_formats_image LABELS e2e)

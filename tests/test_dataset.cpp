@@ -2,7 +2,10 @@
 
 #include <array>
 #include <fstream>
+#include <optional>
 #include <string>
+
+#include <fmt/core.h>
 
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
@@ -186,6 +189,39 @@ TEST_CASE("KITTI sequence folder with ground truth two levels up") {
   expectError(errorOf(seq), "times.txt:3: expected a time in seconds, got '1e300'");
   fs::remove_all(seq / "image_1");
   expectError(errorOf(seq), "image_1: missing");
+}
+
+TEST_CASE("loadGroundTruth: a KITTI sequence's poses take its times.txt, a file given instead wins") {
+  voca::test::ScratchDir dir("dataset-kitti-gt");
+  const fs::path seq = dir / "sequences" / "00";
+  for (const char* folder : {"image_0", "image_1"}) {
+    fs::create_directories(seq / folder);
+    for (int i = 0; i < 3; ++i) voca::writePngGray(seq / folder / fmt::format("{:06d}.png", i), pattern(1).view());
+  }
+  writeText(seq / "times.txt", "0.0\n0.5\n1.0\n");
+  writeText(seq / "calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeText(dir / "poses" / "00.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n1 0 0 2 0 1 0 0 0 0 1 0\n");
+  const Dataset dataset = voca::openDataset(seq);
+  const std::optional<voca::Trajectory> own = voca::loadGroundTruth(dataset);
+  REQUIRE(own.has_value());
+  REQUIRE(own->poses.size() == 3);
+  CHECK(own->poses[1].t_ns == 500000000);
+  CHECK(own->poses[2].T_world_body.translation().x() == doctest::Approx(2.0));
+
+  // A KITTI file given instead also takes the sequence's times; a TUM file keeps its own stamps.
+  writeText(dir / "other.txt", "1 0 0 5 0 1 0 0 0 0 1 0\n1 0 0 6 0 1 0 0 0 0 1 0\n1 0 0 7 0 1 0 0 0 0 1 0\n");
+  const std::optional<voca::Trajectory> kitti = voca::loadGroundTruth(dataset, dir / "other.txt");
+  REQUIRE(kitti.has_value());
+  CHECK(kitti->poses[2].t_ns == 1000000000);
+  CHECK(kitti->poses[0].T_world_body.translation().x() == doctest::Approx(5.0));
+  writeText(dir / "tum.txt", "2.0 0 0 0 0 0 0 1\n2.5 1 0 0 0 0 0 1\n");
+  const std::optional<voca::Trajectory> tum = voca::loadGroundTruth(dataset, dir / "tum.txt");
+  REQUIRE(tum.has_value());
+  REQUIRE(tum->poses.size() == 2);
+  CHECK(tum->poses[1].t_ns == 2500000000);
+
+  fs::remove(dir / "poses" / "00.txt");
+  CHECK_FALSE(voca::loadGroundTruth(voca::openDataset(seq)).has_value());
 }
 
 TEST_CASE("VOCA video layout lists videos and frame timestamps") {

@@ -7,6 +7,7 @@
 
 #include "formats/calib/calibration_io.h"
 #include "formats/image/png_io.h"
+#include "formats/trajectory/trajectory_io.h"
 #include "voca/core/error.h"
 
 namespace voca {
@@ -287,6 +288,16 @@ Dataset openDataset(const fs::path& path) {
   }
   if (!dataset.calibration && fs::is_regular_file(mav0 / "cam0" / "sensor.yaml")) dataset.calibration = mav0;
   return dataset;
+}
+
+std::optional<Trajectory> loadGroundTruth(const Dataset& dataset, const std::optional<std::filesystem::path>& file) {
+  const std::optional<std::filesystem::path>& path = file ? file : dataset.ground_truth;
+  if (!path) return std::nullopt;
+  // The sequence's own poses file is KITTI's; a file given instead may be in any format.
+  if (dataset.layout == DatasetLayout::kKitti && (!file || detectTrajectoryFormat(*path) == TrajectoryFormat::kKitti)) {
+    return loadTrajectory(*path, TrajectoryFormat::kKitti, dataset.root / "times.txt");
+  }
+  return loadTrajectory(*path);
 }
 
 EurocWriter::EurocWriter(const fs::path& root, int num_cameras) : mav0_(root / "mav0") {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "voca/core/image.h"
+#include "voca/trajectory/trajectory.h"
 
 namespace voca {
 
@@ -50,6 +51,12 @@ struct Dataset {
 // Throws InputError for a missing folder, an unknown layout (saying what was looked for) or a
 // malformed csv/times line (file:line).
 Dataset openDataset(const std::filesystem::path& path);
+
+// The ground truth of a run on this dataset: `file` when given, else the dataset's own (nullopt when
+// it has none). A KITTI poses file carries no timestamps, so on a KITTI sequence it takes the
+// sequence's times.txt; every other file is read by its detected format.
+std::optional<Trajectory> loadGroundTruth(const Dataset& dataset,
+                                          const std::optional<std::filesystem::path>& file = std::nullopt);
 
 // Writes a standard EuRoC folder: <root>/mav0/camN/data/<t_ns>.png and camN/data.csv.
 class EurocWriter {

@@ -13,8 +13,8 @@
 
 #include "formats/dataset/dataset.h"
 #include "formats/trajectory/trajectory_io.h"
-#include "pipeline/vo/vo_runner.h"
 #include "pipeline/harness/table_format.h"
+#include "pipeline/vo/vo_runner.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
 
@@ -180,8 +180,7 @@ json evaluateExternal(const ExternalRun& external, const fs::path& dataset_dir,
   try {
     if (!fs::exists(external.trajectory)) throw InputError("no trajectory (the system failed)");
     const Dataset dataset = openDataset(dataset_dir);
-    const std::optional<Trajectory> gt = ground_truth ? std::optional<Trajectory>(loadTrajectory(*ground_truth))
-                                                      : pipeline::loadDatasetGroundTruth(dataset);
+    const std::optional<Trajectory> gt = loadGroundTruth(dataset, ground_truth);
     if (!gt) throw InputError(fmt::format("{} has no ground truth", dataset_dir.string()));
     const Trajectory estimate = loadTrajectory(external.trajectory);
     EvalOptions options;

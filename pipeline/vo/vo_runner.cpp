@@ -72,14 +72,6 @@ class ProgressSink final : public FrameSink {
 
 }  // namespace
 
-std::optional<Trajectory> loadDatasetGroundTruth(const Dataset& dataset) {
-  if (!dataset.ground_truth) return std::nullopt;
-  if (dataset.layout == DatasetLayout::kKitti) {
-    return loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
-  }
-  return loadTrajectory(*dataset.ground_truth);
-}
-
 bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested) {
@@ -191,19 +183,10 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   replay.max_frames = options.max_frames;
   replay.strict = options.strict;
   std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);
-  std::optional<Trajectory> gt;
+  // Ground truth belongs to the recording, not to the temporary encoding of it.
+  const std::optional<Trajectory> gt = loadGroundTruth(raw, options.ground_truth);
   std::string gt_name;
-  // Ground truth belongs to the recording, not to the temporary encoding of it. A KITTI poses file
-  // carries no timestamps: it takes the sequence's times.txt, as the dataset's own would.
-  if (options.ground_truth) {
-    const bool kitti_poses = raw.layout == DatasetLayout::kKitti &&
-                             detectTrajectoryFormat(*options.ground_truth) == TrajectoryFormat::kKitti;
-    gt = kitti_poses ? loadTrajectory(*options.ground_truth, TrajectoryFormat::kKitti, raw.root / "times.txt")
-                     : loadTrajectory(*options.ground_truth);
-    gt_name = options.ground_truth->string();
-  } else if ((gt = loadDatasetGroundTruth(raw))) {
-    gt_name = raw.ground_truth->string();
-  }
+  if (gt) gt_name = (options.ground_truth ? *options.ground_truth : *raw.ground_truth).string();
   VoRunResult run = runVisualOdometryOn(*source, rig, result.config, options, gt, gt_name);
   run.config_name = result.config_name;
   if (temp) {

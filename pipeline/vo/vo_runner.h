@@ -88,9 +88,6 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested);
 
-// The dataset's own ground truth (KITTI poses with their times.txt), if it has one.
-std::optional<Trajectory> loadDatasetGroundTruth(const Dataset& dataset);
-
 // Throws InputError for bad input found before the run starts (missing dataset, calibration or
 // config; images that do not match the calibration). A stage failing during the run does not throw:
 // the result carries it in pipeline.error, with everything estimated up to then.
