@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
-"""Window choice of tools/make_eval_set.py on trajectories with known answers."""
+"""Window choice and suite file of tools/make_eval_set.py on known inputs."""
 
 import importlib.util
+import json
 import pathlib
 import sys
+import tempfile
 import unittest
 
 spec = importlib.util.spec_from_file_location(
@@ -39,6 +41,42 @@ class PickWindow(unittest.TestCase):
         self.assertAlmostEqual(start, 12.0, delta=0.02)
         self.assertAlmostEqual(length, 18.0, delta=0.02)
         self.assertAlmostEqual(speed, 0.5, delta=0.01)
+
+
+class WriteSuite(unittest.TestCase):
+    def test_lists_complete_renders_with_their_encodings(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            out = pathlib.Path(tmp)
+
+            def touch(path):
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text("x")
+
+            names = ["euroc_MH_03_medium-blur", "euroc_MH_03_medium-clean", "tumvi_room1_512_16-clean"]
+            self.assertEqual(make_eval_set.write_suite(out, names, ["500k"], None), 0)
+            self.assertFalse((out / "suite.json").exists())  # nothing rendered: no suite
+
+            touch(out / "euroc_MH_03_medium-blur" / "calib.json")
+            touch(out / "euroc_MH_03_medium-blur-500k" / "mav0" / "cam1" / "data.mp4")
+            touch(out / "euroc_MH_03_medium-clean" / "mav0" / "cam0" / "data.csv")  # render not finished
+            touch(out / "tumvi_room1_512_16-clean" / "calib.json")  # rendered, not encoded yet
+            kitti = out / "kitti" / "sequences" / "06"
+            kitti.mkdir(parents=True)
+            touch(out / "kitti06-500k" / "mav0" / "cam1" / "data.mp4")
+            self.assertEqual(make_eval_set.write_suite(out, names, ["250k", "500k"], kitti), 3)
+            suite = json.loads((out / "suite.json").read_text())
+            self.assertEqual(suite["bitrates"], ["raw", "250k", "500k"])
+            self.assertIn("mv_parallel_of", suite["modes"])
+            by_name = {s["name"]: s for s in suite["sequences"]}
+            self.assertEqual(sorted(by_name), ["euroc_MH_03_medium-blur", "kitti06", "tumvi_room1_512_16-clean"])
+            blur = by_name["euroc_MH_03_medium-blur"]
+            self.assertEqual(blur["path"], "euroc_MH_03_medium-blur")  # relative to the suite file
+            self.assertEqual(blur["encoded"], {"500k": "euroc_MH_03_medium-blur-500k"})
+            self.assertEqual(blur["config"], "euroc")
+            self.assertEqual(by_name["tumvi_room1_512_16-clean"]["config"], "tumvi")
+            self.assertNotIn("encoded", by_name["tumvi_room1_512_16-clean"])
+            self.assertEqual(by_name["kitti06"]["path"], str(kitti.resolve()))
+            self.assertEqual(by_name["kitti06"]["config"], "kitti")
 
 
 if __name__ == "__main__":

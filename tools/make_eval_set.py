@@ -14,11 +14,15 @@ with the camera the recording used (files named tumvi_* get the 512x512 fisheye,
   dark    plus a dim scene (--dark-gain of the light, same noise) with a long exposure
 
 Output: <out>/<sequence>-<condition>/ (raw EuRoC folder with ground truth) and
-<out>/<sequence>-<condition>-<rate>/ (VOCA video folder), ready for voca run / voca bench suite.
-Existing folders are kept, so a second call resumes.
+<out>/<sequence>-<condition>-<rate>/ (VOCA video folder), ready for voca run, and <out>/suite.json,
+which lists every sequence and encoding present so far for
+  voca bench suite <out>/suite.json --out <results>
+(the paper's tables of ATE, RTE and resets per sequence, bitrate and prior mode). Existing folders
+are kept, so a second call resumes; with --suite-only it only rewrites suite.json.
 """
 
 import argparse
+import json
 import math
 import pathlib
 import subprocess
@@ -75,6 +79,38 @@ def pick_window(rows, seconds):
     return best
 
 
+SUITE_MODES = ["none", "of_then_mv", "mv_parallel_of"]
+
+
+def write_suite(out, names, bitrates, kitti):
+    """Writes <out>/suite.json for `voca bench suite`: every sequence of `names` whose render is
+    complete, with the encodings that exist, each run with its camera's shipped config, and the KITTI
+    clip's encodings when present. Returns the number of sequences listed."""
+    sequences = []
+    for name in names:
+        if not (out / name / "calib.json").exists():
+            continue
+        encoded = {rate: f"{name}-{rate}" for rate in bitrates
+                   if (out / f"{name}-{rate}" / "mav0" / "cam1" / "data.mp4").exists()}
+        entry = {"name": name, "path": name, "config": "tumvi" if name.startswith("tumvi") else "euroc"}
+        if encoded:
+            entry["encoded"] = encoded
+        sequences.append(entry)
+    if kitti is not None and kitti.is_dir():
+        encoded = {rate: f"kitti06-{rate}" for rate in bitrates
+                   if (out / f"kitti06-{rate}" / "mav0" / "cam1" / "data.mp4").exists()}
+        entry = {"name": "kitti06", "path": str(kitti.resolve()), "config": "kitti"}
+        if encoded:
+            entry["encoded"] = encoded
+        sequences.append(entry)
+    if not sequences:
+        return 0
+    suite = {"name": "eval_set", "sequences": sequences, "bitrates": ["raw"] + bitrates, "modes": SUITE_MODES,
+             "run_args": ["--threads", "1"]}
+    (out / "suite.json").write_text(json.dumps(suite, indent=2) + "\n")
+    return len(sequences)
+
+
 def run(cmd, log):
     print("  $ " + " ".join(cmd), flush=True)
     with open(log, "w") as f:
@@ -97,6 +133,8 @@ def main():
     p.add_argument("--exposure-ms", type=float, default=12.0, help="shutter time of the blur condition")
     p.add_argument("--dark-gain", type=float, default=0.3, help="light level of the dark condition")
     p.add_argument("--dark-exposure-ms", type=float, default=20.0, help="shutter time of the dark condition")
+    p.add_argument("--suite-only", action="store_true",
+                   help="render and encode nothing: only (re)write <out>/suite.json for what exists")
     p.add_argument("--kitti", type=pathlib.Path,
                    default=here.parent.parent / "shared/data/kitti06_first51/sequences/06",
                    help="a KITTI odometry sequence folder to encode too (skipped when missing)")
@@ -108,12 +146,19 @@ def main():
             raise SystemExit(f"--conditions: unknown condition '{c}' (expected clean, blur, dark)")
     bitrates = [b for b in args.bitrates.split(",") if b]
     files = sorted(f for f in args.trajectories.glob("*.txt") if f.name != "SOURCE.txt")
+    # The suite lists every render in the folder, also those of earlier calls with other --only or
+    # --conditions.
+    names = [f"{f.stem}-{c}" for f in files for c in ("clean", "blur", "dark")]
     if args.only:
         keys = args.only.split(",")
         files = [f for f in files if any(k in f.stem for k in keys)]
     if not files:
         raise SystemExit(f"{args.trajectories}: no trajectory files")
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.suite_only:
+        count = write_suite(args.out, names, bitrates, args.kitti)
+        print(f"{args.out / 'suite.json'}: {count} sequences" if count else "nothing rendered yet: no suite.json")
+        return 0
     logs = args.out / "logs"
     logs.mkdir(exist_ok=True)
 
@@ -142,6 +187,7 @@ def main():
             if not (encoded / "mav0" / "cam1" / "data.mp4").exists():
                 run([args.voca, "encode", str(raw), "--out", str(encoded), "--bitrate", rate],
                     logs / f"{name}-{rate}.encode.log")
+        write_suite(args.out, names, bitrates, args.kitti)  # usable while the rest renders
         elapsed = time.monotonic() - started
         print(f"[{k + 1}/{len(jobs)}] {name} done; {elapsed / 60:.1f} min elapsed, "
               f"~{elapsed / (k + 1) * (len(jobs) - k - 1) / 60:.0f} min left", flush=True)
@@ -151,7 +197,8 @@ def main():
             if not (encoded / "mav0" / "cam1" / "data.mp4").exists():
                 run([args.voca, "encode", str(args.kitti), "--out", str(encoded), "--bitrate", rate],
                     logs / f"kitti06-{rate}.encode.log")
-    print(f"evaluation set in {args.out}")
+    count = write_suite(args.out, names, bitrates, args.kitti)
+    print(f"evaluation set in {args.out}; {count} sequences in {args.out / 'suite.json'}")
     return 0
 
 
