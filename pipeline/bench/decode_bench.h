@@ -36,6 +36,11 @@ struct DecodeBenchResult {
   std::size_t packets = 0;                    // per camera
   double kbit_per_s = 0.0;                    // per camera, at the stream's frame rate (0 when unknown)
   double stream_fps = 0.0;                    // the stream's nominal rate (0 when unknown)
+  // A VOCA video folder: the rate the frames were recorded at (data.csv timestamps), which the
+  // paper's encoding does not keep (it codes at 30 fps whatever the dataset's rate), and the bitrate
+  // per second of recording at that rate. 0 for a single video file.
+  double recording_fps = 0.0;
+  double recording_kbit_per_s = 0.0;
   double demux_packets_per_s = 0.0;           // reading the packets (not part of the timed runs)
   std::string decoder_description;            // the decoder actually used (auto may fall back)
   int frames = 0;                             // (stereo) frames per run
