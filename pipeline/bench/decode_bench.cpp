@@ -146,13 +146,16 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
       result.recording_fps > 0 ? bytes * 8.0 * result.recording_fps / all_packets / 1000.0 : 0.0;
   result.demux_packets_per_s = all_packets / std::max(demux_s, 1e-9);
 
-  std::vector<DecoderOptions> variants(3);
-  result.variants.resize(3);
+  std::vector<DecoderOptions> variants(4);
+  result.variants.resize(4);
   result.variants[0].label = "full decode + MV export";
   result.variants[1].label = "full decode, no MV export";
   variants[1].export_motion = false;
   result.variants[2].label = "MV-only parse (loop filter skipped)";
   variants[2].decode_pixels = false;
+  // The opt-in `--skip-deblock` of voca run: pictures inexact, vectors exact (checked below).
+  result.variants[3].label = "full + MV, deblocking skipped (opt-in)";
+  variants[3].skip_loop_filter = true;
   const DecoderKind kind = parseDecoderKind(opts.decoder);
   for (DecoderOptions& v : variants) {
     v.kind = kind;
@@ -164,13 +167,15 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   frame.reserve(stream.width, stream.height);
   // Warm-up run of each variant (caches, page faults), also checking that the MV-only parse gives the
   // same vectors as the full decode.
-  std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors;
+  std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors, unfiltered_vectors;
   decodeAll(cameras, variants[0], frame, nullptr, &full_vectors);
   decodeAll(cameras, variants[1], frame, nullptr, nullptr);
   decodeAll(cameras, variants[2], frame, nullptr, &parse_vectors);
+  decodeAll(cameras, variants[3], frame, nullptr, &unfiltered_vectors);
   std::size_t num_vectors = 0;
   for (const auto& v : full_vectors) num_vectors += v.size();
-  result.parse_vectors_identical = sameVectors(full_vectors, parse_vectors);
+  result.parse_vectors_identical =
+      sameVectors(full_vectors, parse_vectors) && sameVectors(full_vectors, unfiltered_vectors);
 
   // Variants interleaved per repeat so slow drifts of the machine affect all alike. CPU time of this
   // thread is not inflated when other processes share the cores, so it measures the work itself.

@@ -2,8 +2,9 @@
 // `voca bench decode`: decoder cost on this machine. Decodes a whole video, or both cameras of a VOCA
 // video folder frame by frame as the pipeline does, held in memory on one thread, as (1) full decode
 // with motion-vector export, (2) full decode without, (3) MV-only parse with the loop filter
-// skipped; times every (stereo) frame with this thread's CPU clock and checks that the parse gives
-// the full decode's vectors.
+// skipped, (4) full decode + MV with the deblocking filter skipped (voca run --skip-deblock); times
+// every (stereo) frame with this thread's CPU clock and checks that (3) and (4) give the full decode's
+// vectors.
 
 #include <cstddef>
 #include <filesystem>
@@ -45,8 +46,8 @@ struct DecodeBenchResult {
   std::string decoder_description;            // the decoder actually used (auto may fall back)
   int frames = 0;                             // (stereo) frames per run
   double vectors_per_frame = 0.0;             // per camera frame
-  bool parse_vectors_identical = false;       // MV-only parse == full decode's vectors
-  std::vector<DecodeVariantResult> variants;  // full + MV, full without MV, MV-only parse
+  bool parse_vectors_identical = false;       // MV-only parse and deblock-skipped decode == full decode's vectors
+  std::vector<DecodeVariantResult> variants;  // full + MV, full without MV, MV-only parse, full + MV unfiltered
 };
 
 // Throws InputError for a bad --repeat, an unreadable video, one without packets, or cameras whose

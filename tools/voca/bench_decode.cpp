@@ -60,7 +60,8 @@ void printResult(const pipeline::DecodeBenchOptions& opts, const pipeline::Decod
   fmt::print("  MV extraction overhead: {:+.3f} ms per {} ({:+.1f} %), {:.0f} vectors per camera frame\n",
              full_ms - no_mv_ms, stereo ? "stereo frame" : "frame", 100.0 * (full_ms - no_mv_ms) / no_mv_ms,
              r.vectors_per_frame);
-  fmt::print("  MV-only parse vectors identical to full decode: {}\n", r.parse_vectors_identical ? "yes" : "NO");
+  fmt::print("  MV-only parse and deblocking-skipped vectors identical to full decode: {}\n",
+             r.parse_vectors_identical ? "yes" : "NO");
   const pipeline::DecodeVariantResult& full = r.variants[0];
   if (stereo) {
     const char* verdict = full.median_ms > kTargetMedianMs     ? "missed"
@@ -112,8 +113,10 @@ Runner configureDecodeBench(CLI::App& app) {
   app.footer(
       "Decodes the whole input in memory (demuxing excluded) on one thread with the chosen decoder, both\n"
       "cameras frame by frame as the pipeline does, as (1) full decode with motion-vector export, (2) full\n"
-      "decode without, (3) MV-only parse with the loop filter skipped, and prints this thread's CPU time\n"
-      "per stereo frame (median, p99, mean), frames per second and the cost of MV extraction.\n"
+      "decode without, (3) MV-only parse with the loop filter skipped, (4) full decode + MV with the\n"
+      "deblocking filter skipped (voca run --skip-deblock: faster, pictures no longer the encoder's), and\n"
+      "prints this thread's CPU time per stereo frame (median, p99, mean), frames per second and the cost of\n"
+      "MV extraction.\n"
       "Without an input it measures a moving synthetic sequence (voca synth --motion aggressive --seconds 40,\n"
       "encoded at 500 kbit/s), rendered once and kept in $XDG_CACHE_HOME/voca/bench (else ~/.cache/voca/bench);\n"
       "the first call takes minutes. The target line checks full decode + MV of both cameras: median <= 1 ms\n"
