@@ -14,3 +14,5 @@ voca_add_test(test_decode_structure SOURCES test_decode_structure.cpp LIBS voca_
 # drops; the V4L2 M2M probe's capability rule.
 voca_add_test(test_decode_pairing SOURCES test_decode_pairing.cpp LIBS voca_drivers_decode voca_drivers_encode
               voca_platform_v4l2 PkgConfig::FFMPEG)
+# `voca bench decode` on a VOCA folder made in the test: rates and bitrates as stream and recording.
+voca_add_test(test_decode_bench SOURCES test_decode_bench.cpp LIBS voca_pipeline_bench voca_drivers_encode)

@@ -116,7 +116,8 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   requireSuccess(bench, "voca bench decode");
   INFO("voca bench printed:\n" << bench.text);
   CHECK(bench.text.find("fps") != std::string::npos);
-  CHECK(bench.text.find("MV-only parse vectors identical to full decode: yes") != std::string::npos);
+  CHECK(bench.text.find("MV-only parse and deblocking-skipped vectors identical to full decode: yes") !=
+        std::string::npos);
   CHECK(bench.text.find("this is one camera's video") != std::string::npos);
   // ... and on the folder: both cameras per stereo frame, with the target's verdict.
   const auto stereo_bench = runVocaOutput("bench decode " + video.string() + " --repeat 1");
@@ -124,7 +125,8 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   INFO("voca bench decode printed:\n" << stereo_bench.text);
   CHECK(stereo_bench.text.find("2 cameras") != std::string::npos);
   CHECK(stereo_bench.text.find("per stereo frame (both cameras)") != std::string::npos);
-  CHECK(stereo_bench.text.find("MV-only parse vectors identical to full decode: yes") != std::string::npos);
+  CHECK(stereo_bench.text.find("MV-only parse and deblocking-skipped vectors identical to full decode: yes") !=
+        std::string::npos);
   const std::size_t target = stereo_bench.text.find("target per stereo frame on one core, full decode + MV");
   REQUIRE(target != std::string::npos);
   const std::string verdict = stereo_bench.text.substr(stereo_bench.text.find("median: ", target) + 8, 3);

@@ -72,19 +72,21 @@ std::vector<GrayImage> render(const WaveTexture& texture, const Motion& to_textu
 }
 
 void encode(const std::filesystem::path& path, const std::vector<GrayImage>& frames, const std::string& codec,
-            bool two_pass = true) {
+            bool two_pass = true, std::int64_t bitrate_bps = 2000000) {
   voca::encode::EncoderSettings settings;
   settings.two_pass = two_pass;
-  settings.codec = codec;          // libx264 keeps the paper's x264 parameters (quarter-pel, no B-frames)
-  settings.bitrate_bps = 2000000;  // ~1 bit/pixel/frame: enough that rate control does not starve vectors
+  settings.codec = codec;              // libx264 keeps the paper's x264 parameters (quarter-pel, no B-frames)
+  settings.bitrate_bps = bitrate_bps;  // default ~1 bit/pixel/frame: rate control does not starve vectors
   voca::encode::encodeVideoFile(path, settings, [&](const std::function<void(voca::GrayView)>& emit) {
     for (const GrayImage& f : frames) emit(f.view());
   });
 }
 
-std::vector<DecodedFrame> decodeAll(const std::filesystem::path& path, std::vector<std::int64_t> t_ns = {}) {
+std::vector<DecodedFrame> decodeAll(const std::filesystem::path& path, std::vector<std::int64_t> t_ns = {},
+                                    bool skip_loop_filter = false) {
   voca::decode::DecoderOptions options;
   options.kind = voca::decode::DecoderKind::kSoftware;
+  options.skip_loop_filter = skip_loop_filter;
   voca::decode::VideoReader reader(path, std::move(t_ns), options);
   std::vector<DecodedFrame> frames;
   DecodedFrame frame;
@@ -177,6 +179,43 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
   for (int y = 0; y < kHeight; ++y)
     for (int x = 0; x < kWidth; ++x) err += std::abs(int(truth[3](x, y)) - int(frames[3].luma(x, y)));
   CHECK(err / (kWidth * kHeight) < 6.0);  // mean absolute error at 2 Mbit/s is a few grey levels
+}
+
+TEST_CASE("skipping the deblocking filter keeps the vectors exact and changes only the pictures' filtering") {
+  voca::test::ScratchDir dir("decode-skip-deblock");
+  const WaveTexture texture(5);
+  const Motion motion = [](const Eigen::Vector2d& p, int k) {
+    return Eigen::Vector2d(p.x() - 0.75 * k, p.y() - 0.25 * k);
+  };
+  const std::vector<GrayImage> truth = render(texture, motion);
+  // A low rate (coarse quantisation, visible block edges) so that the deblocking filter has work to do.
+  encode(dir / "d.mp4", truth, "libx264", true, 150000);
+  const std::vector<DecodedFrame> filtered = decodeAll(dir / "d.mp4");
+  const std::vector<DecodedFrame> unfiltered = decodeAll(dir / "d.mp4", {}, true);
+  REQUIRE(filtered.size() == std::size_t(kFrames));
+  REQUIRE(unfiltered.size() == filtered.size());
+  int differing_pixels = 0;
+  for (int k = 0; k < kFrames; ++k) {
+    const auto a = filtered[k].motion.blocks(), b = unfiltered[k].motion.blocks();
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      CHECK((a[i].x == b[i].x && a[i].y == b[i].y && a[i].w == b[i].w && a[i].h == b[i].h && a[i].dx == b[i].dx &&
+             a[i].dy == b[i].dy));
+    }
+    double err_filtered = 0, err_unfiltered = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        differing_pixels += filtered[k].luma(x, y) != unfiltered[k].luma(x, y) ? 1 : 0;
+        err_filtered += std::abs(int(truth[k](x, y)) - int(filtered[k].luma(x, y)));
+        err_unfiltered += std::abs(int(truth[k](x, y)) - int(unfiltered[k].luma(x, y)));
+      }
+    // Without the filter the picture is still the encoded one up to compression loss, only not the
+    // encoder's reconstruction: its error stays close to the filtered decode's.
+    CHECK(err_unfiltered < 1.5 * err_filtered + 0.5 * kWidth * kHeight);
+  }
+  // The option is real: the filter changed pixels that the unfiltered decode leaves as they were.
+  MESSAGE("skip-deblock: " << differing_pixels << " pixels differ over " << kFrames << " frames");
+  CHECK(differing_pixels > 0);
 }
 
 TEST_CASE("H.264 vectors of a small rotation match the true motion") {

@@ -236,7 +236,7 @@ CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   ctx->thread_type = FF_THREAD_SLICE;
   if (options.export_motion || motion_only) ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
   // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
-  if (motion_only) ctx->skip_loop_filter = AVDISCARD_ALL;
+  if (motion_only || options.skip_loop_filter) ctx->skip_loop_filter = AVDISCARD_ALL;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
   const int rc = avcodec_open2(ctx.get(), codec, nullptr);
   if (rc < 0)

@@ -9,6 +9,7 @@
 
 #include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/video_decoder.h"
+#include "drivers/encode/dataset_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "platform/realtime/clock.h"
 #include "voca/core/error.h"
@@ -71,8 +72,10 @@ int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& o
   return frames;
 }
 
-// The videos to decode together: both cameras of a VOCA video folder, or the one file given.
-std::vector<std::filesystem::path> benchVideos(const std::filesystem::path& input) {
+// The videos to decode together: both cameras of a VOCA video folder, or the one file given; for a
+// folder also the rate its frames were recorded at (0 when its data.csv cannot tell).
+std::vector<std::filesystem::path> benchVideos(const std::filesystem::path& input, double& recording_fps) {
+  recording_fps = 0.0;
   if (!std::filesystem::is_directory(input)) return {input};
   const Dataset dataset = openDataset(input);
   if (dataset.layout != DatasetLayout::kVocaVideo) {
@@ -80,6 +83,15 @@ std::vector<std::filesystem::path> benchVideos(const std::filesystem::path& inpu
         fmt::format("{} is a {} image folder; voca bench decode needs a video file or a VOCA video "
                     "folder (voca encode makes one)",
                     input.string(), layoutName(dataset.layout)));
+  }
+  if (dataset.frames.size() >= 2) {
+    int fps_num = 0, fps_den = 1;
+    try {
+      encode::datasetFrameRate(dataset, fps_num, fps_den);
+      recording_fps = double(fps_num) / fps_den;
+    } catch (const InputError&) {
+      // Timestamps that do not increase: the rate stays unknown, the benchmark itself is unaffected.
+    }
   }
   return {dataset.video_left, dataset.video_right};
 }
@@ -101,7 +113,7 @@ bool sameVectors(const std::vector<std::vector<MotionBlock>>& a, const std::vect
 DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   if (opts.repeat < 1) throw InputError(fmt::format("--repeat: expected at least 1, got {}", opts.repeat));
   DecodeBenchResult result;
-  result.videos = benchVideos(opts.input);
+  result.videos = benchVideos(opts.input, result.recording_fps);
   std::vector<CameraPackets> cameras;
   const auto demux_start = std::chrono::steady_clock::now();
   for (const std::filesystem::path& video : result.videos) {
@@ -130,15 +142,20 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   const double all_packets = static_cast<double>(result.packets * cameras.size());
   result.stream_fps = stream.frame_rate_num > 0 ? double(stream.frame_rate_num) / stream.frame_rate_den : 0.0;
   result.kbit_per_s = result.stream_fps > 0 ? bytes * 8.0 * result.stream_fps / all_packets / 1000.0 : 0.0;
+  result.recording_kbit_per_s =
+      result.recording_fps > 0 ? bytes * 8.0 * result.recording_fps / all_packets / 1000.0 : 0.0;
   result.demux_packets_per_s = all_packets / std::max(demux_s, 1e-9);
 
-  std::vector<DecoderOptions> variants(3);
-  result.variants.resize(3);
+  std::vector<DecoderOptions> variants(4);
+  result.variants.resize(4);
   result.variants[0].label = "full decode + MV export";
   result.variants[1].label = "full decode, no MV export";
   variants[1].export_motion = false;
   result.variants[2].label = "MV-only parse (loop filter skipped)";
   variants[2].decode_pixels = false;
+  // The opt-in `--skip-deblock` of voca run: pictures inexact, vectors exact (checked below).
+  result.variants[3].label = "full + MV, deblocking skipped (opt-in)";
+  variants[3].skip_loop_filter = true;
   const DecoderKind kind = parseDecoderKind(opts.decoder);
   for (DecoderOptions& v : variants) {
     v.kind = kind;
@@ -150,13 +167,15 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   frame.reserve(stream.width, stream.height);
   // Warm-up run of each variant (caches, page faults), also checking that the MV-only parse gives the
   // same vectors as the full decode.
-  std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors;
+  std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors, unfiltered_vectors;
   decodeAll(cameras, variants[0], frame, nullptr, &full_vectors);
   decodeAll(cameras, variants[1], frame, nullptr, nullptr);
   decodeAll(cameras, variants[2], frame, nullptr, &parse_vectors);
+  decodeAll(cameras, variants[3], frame, nullptr, &unfiltered_vectors);
   std::size_t num_vectors = 0;
   for (const auto& v : full_vectors) num_vectors += v.size();
-  result.parse_vectors_identical = sameVectors(full_vectors, parse_vectors);
+  result.parse_vectors_identical =
+      sameVectors(full_vectors, parse_vectors) && sameVectors(full_vectors, unfiltered_vectors);
 
   // Variants interleaved per repeat so slow drifts of the machine affect all alike. CPU time of this
   // thread is not inflated when other processes share the cores, so it measures the work itself.

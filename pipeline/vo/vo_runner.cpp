@@ -238,6 +238,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     DecodeStageOptions decode_options;
     decode_options.decoder.kind = options.decoder;
     decode_options.decoder.strict = options.strict;
+    decode_options.decoder.skip_loop_filter = options.skip_deblock;
     decode_options.decoder.log_choice = false;
     for (std::size_t c = 0; c < 2; ++c) {
       decode_options.names[c] = info.stream_names[c].empty() ? fmt::format("cam{}", c) : info.stream_names[c];

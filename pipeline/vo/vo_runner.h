@@ -39,6 +39,7 @@ struct VoRunOptions {
   int max_points = 1000;                // frontend capacity per camera
   bool estimate = true;                 // false: frontend only (`voca track`)
   decode::DecoderKind decoder = decode::DecoderKind::kAuto;
+  bool skip_deblock = false;  // software decoding without the loop filter (faster, pictures inexact)
   // Stream URLs: how long to wait for the stream to begin, and the silence that ends it.
   double stream_start_timeout_s = 30.0;
   double stream_timeout_s = 3.0;

@@ -20,6 +20,7 @@ struct PipelineCli {
   double speed = 1.0;
   bool strict = false;
   std::string decoder = "auto";
+  bool skip_deblock = false;
   bool profile = false;
   std::string trace;
   std::string stats;
