@@ -243,9 +243,12 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     const bool has_vector = block != nullptr;
     const Eigen::Vector2f mv = has_vector ? Eigen::Vector2f(block->dx, block->dy) : zero;
 
+    // A zero vector starts the prior track where the plain one starts: the same track, run once.
+    const bool same_start = has_vector && mv.x() == 0.f && mv.y() == 0.f;
+
     // The modes differ only in which guesses run and how their results merge.
     bool run_plain = false, run_prior = false, plain_ok = false, prior_ok = false;
-    Eigen::Vector2f plain_px, prior_px;
+    Eigen::Vector2f plain_px = p, prior_px = p + mv;  // a failed track leaves its guess in the trace
     switch (mode) {
       case PriorMode::kNone:
         run_plain = true;
@@ -271,18 +274,26 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       // point is kept from the plain track whatever the prior's round trip says, so that one is
       // skipped; the outcome equals running both checks.
       const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, plain_px);
-      const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px);
+      bool prior_forward = plain_forward;
+      if (same_start) {
+        prior_px = plain_px;
+      } else {
+        prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px);
+      }
       const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
       plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, cam.slot(plain_slot));
-      prior_ok =
-          (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot)));
+      prior_ok = same_start ? plain_ok
+                            : (agree && plain_ok) ||
+                                  (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot)));
     } else {
+      // The retry of the sequential modes runs only from a different start: from the same one it
+      // would fail again.
       if (mode == PriorMode::kMvThenOf && run_prior) {
         prior_ok = attempt(mv, prior_slot, prior_px);
-        run_plain = !prior_ok;
+        run_plain = !prior_ok && !same_start;
       }
       if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
-      if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
+      if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok && !same_start;
       if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
     }
     ts.tracked_plain += plain_ok;
