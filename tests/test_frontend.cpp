@@ -471,6 +471,93 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
   CHECK(unbridged[2].correct <= unbridged[2].visible / 4);
 }
 
+TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the finest levels only") {
+  // 12 px/frame: the previous position needs the coarse levels, a vector within a pixel does not.
+  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(12.0, 5.0)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  MotionField field(seq.kWidth, seq.kHeight);
+  struct Outcome {
+    int visible = 0, correct = 0, kept = 0;
+  };
+  const auto run = [&](int prior_pyramid_levels, const Eigen::Vector2f& vector_error) {
+    FrontendConfig config;
+    config.prior_mode = PriorMode::kMv;
+    config.prior_pyramid_levels = prior_pyramid_levels;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    uniformField(field, seq.kWidth, seq.kHeight, flow + vector_error, PictureType::kP);
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    for (int k = 0; k < 2; ++k) {
+      seq.render(k);
+      DecodedStereoFrame in = seq.input(k);
+      in.motion = {field, field};
+      in.has_motion = true;
+      frontend.track(in, frame, stats);
+    }
+    Outcome outcome;
+    outcome.kept = stats.temporal[0].kept;
+    for (const PointTrace& t : frontend.traces(0)) {
+      const Eigen::Vector2f truth = t.previous_px + flow;
+      outcome.visible +=
+          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
+      if (t.kept) outcome.correct += (t.tracked_px - truth).norm() < 0.1f;
+    }
+    return outcome;
+  };
+  // A vector within a pixel: level 0 alone finds the true position (80 %, as in the test above).
+  const Outcome close = run(0, Eigen::Vector2f(0.75f, -0.5f));
+  REQUIRE(close.visible >= 20);
+  CHECK(close.correct >= close.visible * 8 / 10);
+  CHECK(close.kept - close.correct <= 2);
+  // Off by 5 px: beyond level 0's reach (about 2 px; 1 of 47 here), within the whole pyramid's, so the
+  // key is what decides.
+  const Outcome far_finest = run(0, Eigen::Vector2f(5.f, 0.f));
+  const Outcome far_all = run(-1, Eigen::Vector2f(5.f, 0.f));
+  CHECK(far_finest.correct <= far_finest.visible / 4);
+  CHECK(far_all.correct >= far_all.visible * 3 / 4);  // 38 of 47 here; the rest leave the image or drift
+}
+
+TEST_CASE("frontend: a zero motion vector tracks exactly as no prior (the prior track runs once)") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  MotionField field(seq.kWidth, seq.kHeight);
+  uniformField(field, seq.kWidth, seq.kHeight, Eigen::Vector2f::Zero(), PictureType::kP);
+  std::map<PriorMode, std::vector<KeypointObservation>> tracks;
+  std::map<PriorMode, TemporalStats> temporal;
+  for (PriorMode mode : kAllPriorModes) {
+    FrontendConfig config;
+    config.prior_mode = mode;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    for (int k = 0; k < 3; ++k) {
+      seq.render(k);
+      DecodedStereoFrame in = seq.input(k);
+      in.motion = {field, field};
+      in.has_motion = true;
+      frontend.track(in, frame, stats);
+    }
+    tracks[mode] = frame.observations[0];
+    temporal[mode] = stats.temporal[0];
+  }
+  const std::vector<KeypointObservation>& none = tracks[PriorMode::kNone];
+  REQUIRE(none.size() >= 20);
+  for (PriorMode mode : kAllPriorModes) {
+    INFO("mode " << priorModeName(mode));
+    const std::vector<KeypointObservation>& other = tracks[mode];
+    REQUIRE(other.size() == none.size());
+    for (std::size_t i = 0; i < none.size(); ++i) {
+      CHECK(other[i].track_id == none[i].track_id);
+      CHECK(other[i].px == none[i].px);  // bit for bit
+    }
+    CHECK(temporal[mode].consensus_rejections == 0);
+    CHECK(temporal[mode].rescued == 0);
+  }
+  // In parallel both guesses count as tracked, the plain one's result standing for the prior's.
+  CHECK(temporal[PriorMode::kMvParallelOf].tracked_prior == temporal[PriorMode::kMvParallelOf].tracked_plain);
+}
+
 TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by the consensus check") {
   // On a texture with period 24 px, a vector off by one period leads the prior track to an equally
   // good match 24 px away; forward-backward cannot see it (the backward track starts from the

@@ -115,6 +115,14 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   message = errorFor(R"({"frontend": {"detection_min_threshold": 50}})");
   CHECK(contains(message, "frontend.detection_min_threshold: expected an integer in [1, 40], got 50"));
 
+  message = errorFor(R"({"frontend": {"min_step_px": 0}})");
+  CHECK(contains(message, "frontend.min_step_px: expected a number in (0, 10], got 0"));
+  message = errorFor(R"({"frontend": {"coarse_min_step_px": -1}})");
+  CHECK(contains(message, "frontend.coarse_min_step_px"));
+  // At most the pyramid the plain guess uses; -1 means all of it.
+  message = errorFor(R"({"frontend": {"pyramid_levels": 2, "prior_pyramid_levels": 3}})");
+  CHECK(contains(message, "frontend.prior_pyramid_levels: expected an integer in [-1, 2], got 3"));
+
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));
 

@@ -26,6 +26,8 @@ const FrontendField kFrontendFields[] = {
     {"grid_size_px", &FrontendConfig::grid_size_px},
     {"pyramid_levels", &FrontendConfig::pyramid_levels},
     {"max_iterations", &FrontendConfig::max_iterations},
+    {"min_step_px", &FrontendConfig::min_step_px},
+    {"coarse_min_step_px", &FrontendConfig::coarse_min_step_px},
     {"pattern", &FrontendConfig::pattern},
     {"max_recovered_dist2_px2", &FrontendConfig::max_recovered_dist2_px2},
     {"epipolar_error", &FrontendConfig::epipolar_error},
@@ -55,6 +57,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_reject_inconsistent", &FrontendConfig::prior_reject_inconsistent},
     {"prior_min_block_px", &FrontendConfig::prior_min_block_px},
     {"prior_max_residual_px", &FrontendConfig::prior_max_residual_px},
+    {"prior_pyramid_levels", &FrontendConfig::prior_pyramid_levels},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
     {"presmooth", &FrontendConfig::presmooth},
 };

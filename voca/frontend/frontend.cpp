@@ -52,7 +52,10 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   }
   pattern_ = patternBySize(config_.pattern);
   num_levels_ = config_.pyramid_levels + 1;
+  prior_levels_ = config_.prior_pyramid_levels < 0 ? num_levels_ : config_.prior_pyramid_levels + 1;
   align_.max_iterations = config_.max_iterations;
+  align_.min_step_px = static_cast<float>(config_.min_step_px);
+  align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
   max_points_ = capacities.max_points;
   if (max_points_ < 1) throw InputError("frontend capacity: max_points must be at least 1");
   width_ = rig.cameras[0].width;
@@ -146,29 +149,33 @@ void KltFrontend::reset() {
 }
 
 bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                               const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const {
+                               const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked) const {
   SE2f T_forward(0.f, p + flow_guess);
-  if (trackPatch(forward, to, *pattern_, align_, T_forward) != AlignStatus::kConverged) return false;
+  if (trackPatch(forward.first(static_cast<std::size_t>(levels)), to, *pattern_, align_, T_forward) !=
+      AlignStatus::kConverged)
+    return false;
   tracked = T_forward.translation();
   return true;
 }
 
 bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                                const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                                const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess, int levels,
                                 std::span<PatchTemplate> backward) const {
   // The backward track starts from the negated guess, so a correct prior lands it near p again.
   SE2f T_backward(0.f, tracked - flow_guess);
-  buildPyramidPatch(to, tracked, *pattern_, backward);
-  if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
+  buildPyramidPatch(to, tracked, *pattern_, backward);  // every level: the next frame's forward templates
+  if (trackPatch(backward.first(static_cast<std::size_t>(levels)), from, *pattern_, align_, T_backward) !=
+      AlignStatus::kConverged)
+    return false;
   return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
 }
 
 bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
-                               const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess,
+                               const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
                                std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
   Eigen::Vector2f tracked;
-  if (!trackForward(forward, to, p, flow_guess, tracked)) return false;
-  if (!checkBackward(from, to, p, tracked, flow_guess, backward)) return false;
+  if (!trackForward(forward, to, p, flow_guess, levels, tracked)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, levels, backward)) return false;
   result = tracked;
   return true;
 }
@@ -223,6 +230,9 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   cam.traces.clear();
   ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
+  const int all_levels = num_levels_;
+  // A bridged field is an older frame's motion, less exact: its guesses get the whole pyramid.
+  const int prior_levels = stats.bridged[static_cast<std::size_t>(camera)] ? num_levels_ : prior_levels_;
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
@@ -243,9 +253,12 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     const bool has_vector = block != nullptr;
     const Eigen::Vector2f mv = has_vector ? Eigen::Vector2f(block->dx, block->dy) : zero;
 
+    // A zero vector starts the prior track where the plain one starts: the same track, run once.
+    const bool same_start = has_vector && mv.x() == 0.f && mv.y() == 0.f && prior_levels == all_levels;
+
     // The modes differ only in which guesses run and how their results merge.
     bool run_plain = false, run_prior = false, plain_ok = false, prior_ok = false;
-    Eigen::Vector2f plain_px, prior_px;
+    Eigen::Vector2f plain_px = p, prior_px = p + mv;  // a failed track leaves its guess in the trace
     switch (mode) {
       case PriorMode::kNone:
         run_plain = true;
@@ -263,27 +276,36 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     }
     const int forward_slot = cam.slots[i];
     const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
-    const auto attempt = [&](const Eigen::Vector2f& guess, int backward_slot, Eigen::Vector2f& tracked) {
-      return trackChecked(cam.slot(forward_slot), from, to, p, guess, cam.slot(backward_slot), tracked);
+    const auto attempt = [&](const Eigen::Vector2f& guess, int levels, int backward_slot, Eigen::Vector2f& tracked) {
+      return trackChecked(cam.slot(forward_slot), from, to, p, guess, levels, cam.slot(backward_slot), tracked);
     };
     if (mode == PriorMode::kMvParallelOf && run_prior) {
       // Both forward tracks first. When they agree and the plain one passes its round trip, the
       // point is kept from the plain track whatever the prior's round trip says, so that one is
       // skipped; the outcome equals running both checks.
-      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, plain_px);
-      const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_px);
-      const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
-      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, cam.slot(plain_slot));
-      prior_ok =
-          (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, cam.slot(prior_slot)));
-    } else {
-      if (mode == PriorMode::kMvThenOf && run_prior) {
-        prior_ok = attempt(mv, prior_slot, prior_px);
-        run_plain = !prior_ok;
+      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, all_levels, plain_px);
+      bool prior_forward = plain_forward;
+      if (same_start) {
+        prior_px = plain_px;
+      } else {
+        prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
       }
-      if (run_plain) plain_ok = attempt(zero, plain_slot, plain_px);
-      if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok;
-      if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_slot, prior_px);
+      const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
+      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, all_levels, cam.slot(plain_slot));
+      prior_ok = same_start
+                     ? plain_ok
+                     : (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_levels,
+                                                                              cam.slot(prior_slot)));
+    } else {
+      // The retry of the sequential modes runs only from a different start: from the same one it
+      // would fail again.
+      if (mode == PriorMode::kMvThenOf && run_prior) {
+        prior_ok = attempt(mv, prior_levels, prior_slot, prior_px);
+        run_plain = !prior_ok && !same_start;
+      }
+      if (run_plain) plain_ok = attempt(zero, all_levels, plain_slot, plain_px);
+      if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok && !same_start;
+      if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_levels, prior_slot, prior_px);
     }
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
@@ -366,7 +388,8 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
     }
     Eigen::Vector2f matched;
     const int right_slot = right.acquire();
-    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, right.slot(right_slot), matched)) {
+    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, right.slot(right_slot),
+                     matched)) {
       right.ids.push_back(id);
       right.points.push_back(matched);
       right.slots.push_back(right_slot);

@@ -120,18 +120,18 @@ class KltFrontend {
     void resetSlots();
   };
 
-  // Forward-backward tracking from `from` to `to` with a flow guess; true and the converged position
-  // when both directions converge and the round trip returns within max_recovered_dist2.
-  // `forward` holds the templates of p in `from` (shared by all guesses of one point); `backward`
-  // receives the templates at the result in `to`.
+  // Forward-backward tracking from `from` to `to` with a flow guess on the finest `levels` pyramid
+  // levels; true and the converged position when both directions converge and the round trip returns
+  // within max_recovered_dist2. `forward` holds the templates of p in `from` (shared by all guesses
+  // of one point); `backward` receives the templates at the result in `to`, on every level.
   bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
-                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, std::span<PatchTemplate> backward,
-                    Eigen::Vector2f& result) const;
+                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
+                    std::span<PatchTemplate> backward, Eigen::Vector2f& result) const;
   // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
   bool trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                    const Eigen::Vector2f& flow_guess, Eigen::Vector2f& tracked) const;
+                    const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked) const;
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                     const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                     const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess, int levels,
                      std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
@@ -147,6 +147,7 @@ class KltFrontend {
   const PatchPattern* pattern_ = nullptr;
   AlignParams align_;
   int num_levels_ = 0;
+  int prior_levels_ = 0;  // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
   int max_points_ = 0;
   int width_ = 0, height_ = 0;
   std::array<GenericCamera<double>, 2> cameras_model_;

@@ -78,6 +78,8 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkInt(context, "grid_size_px", c.grid_size_px, 8, 1024);
   checkInt(context, "pyramid_levels", c.pyramid_levels, 0, 6);
   checkInt(context, "max_iterations", c.max_iterations, 1, 100);
+  checkReal(context, "min_step_px", c.min_step_px, 0.0, 10.0, true);
+  checkReal(context, "coarse_min_step_px", c.coarse_min_step_px, 0.0, 10.0, true);
   if (c.pattern != 24 && c.pattern != 52) {
     throw InputError(fmt::format("{}.pattern: expected 24 or 52, got {}", context, c.pattern));
   }
@@ -91,6 +93,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkReal(context, "consensus_tolerance_px2", c.consensus_tolerance_px2, 0.0, 1e4, false);
   checkInt(context, "prior_min_block_px", c.prior_min_block_px, 0, 64);
   checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
+  checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
 }
 
 }  // namespace voca

@@ -38,8 +38,13 @@ std::optional<StereoGuess> parseStereoGuess(std::string_view name);
 
 struct FrontendConfig {
   int grid_size_px = 40;
-  int pyramid_levels = 3;                 // levels above the full-resolution image (4 levels in all)
-  int max_iterations = 5;                 // Gauss-Newton iterations per level
+  int pyramid_levels = 3;  // levels above the full-resolution image (4 levels in all)
+  int max_iterations = 5;  // Gauss-Newton iterations per level
+  // A level's iterations also stop once a step moves the patch less than this (level pixels): on the
+  // full-resolution level min_step_px, on the coarser ones, whose result the finer levels refine,
+  // coarse_min_step_px. Larger values save iterations and move results slightly (configs/README.md).
+  double min_step_px = 0.002;
+  double coarse_min_step_px = 0.05;
   int pattern = 52;                       // 24 or 52 sample points per patch
   double max_recovered_dist2_px2 = 0.25;  // forward-backward round trip tolerance
   double epipolar_error = 0.005;          // |f0^T E f1| on unit bearings
@@ -67,6 +72,11 @@ struct FrontendConfig {
   bool prior_reject_inconsistent = false;
   int prior_min_block_px = 0;
   double prior_max_residual_px = 0.0;
+  // Pyramid levels above full resolution on which a guess from a P-frame's motion vector is tracked
+  // (forward and round trip); -1 = pyramid_levels. The vector usually lands within a pixel or two,
+  // which the finest levels capture without the coarse ones. Bridged vectors (carried over an I-frame)
+  // and the plain guess from the previous position always use pyramid_levels.
+  int prior_pyramid_levels = -1;
   // Also detect in the right image where the left camera does not see (cells whose reprojection
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).
