@@ -11,8 +11,6 @@ namespace {
 // A landmark whose outlier observations leave fewer than this many is dropped as a whole
 // (Basalt's filterOutliers(threshold, 4)): with so few views the remaining ones are suspect too.
 constexpr int kFilterMinObservations = 4;
-// Relative cost decrease below which LM stops.
-constexpr double kConvergedRelativeDecrease = 1e-6;
 // Regularisation of blocks that are inverted without damping (marginalisation); far below any
 // real information (a 1 px error at 1 m gives about 1e5 on the pose diagonal).
 constexpr double kTinyRegularization = 1e-9;
@@ -234,7 +232,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         const double next = cost(state);
         if (std::isfinite(next) && next <= current) {
           accepted = true;
-          converged = current - next <= kConvergedRelativeDecrease * current;
+          converged = current - next <= config_.converged_relative_decrease * current;
           current = next;
           if (config_.use_lm) lambda = std::max(config_.lm_lambda_min, lambda / 3.0);
           break;
