@@ -24,6 +24,7 @@ const Field kFields[] = {
     {"min_inverse_distance", &BackendConfig::min_inverse_distance, 0.0, 1e3},
     {"max_inverse_distance", &BackendConfig::max_inverse_distance, 1e-6, 1e3},
     {"max_iterations", &BackendConfig::max_iterations, 1, 100},
+    {"converged_relative_decrease", &BackendConfig::converged_relative_decrease, 0.0, 1.0},
     {"use_lm", &BackendConfig::use_lm},
     {"lm_lambda_initial", &BackendConfig::lm_lambda_initial, 0.0, 1e6},
     {"lm_lambda_min", &BackendConfig::lm_lambda_min, 0.0, 1e6},

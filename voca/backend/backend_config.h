@@ -26,7 +26,11 @@ struct BackendConfig {
   double min_inverse_distance = 1e-3;      // 1/m; farther points carry no translation information
   double max_inverse_distance = 3.0;       // 1/m; Basalt's plausibility bound (closer than 0.33 m is rejected)
   // Optimisation.
-  int max_iterations = 7;           // vio_max_iterations
+  int max_iterations = 7;  // vio_max_iterations
+  // LM stops once an accepted step lowers the cost by less than this fraction (converging before
+  // filter_iteration runs the outlier filter first, then goes on). 1e-6 runs almost every frame
+  // to max_iterations.
+  double converged_relative_decrease = 1e-6;
   bool use_lm = true;               // vio_use_lm (false: Gauss-Newton at lm_lambda_initial)
   double lm_lambda_initial = 1e-4;  // vio_lm_lambda_initial
   double lm_lambda_min = 1e-5;      // vio_lm_lambda_min

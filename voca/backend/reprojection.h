@@ -80,9 +80,10 @@ struct HostBearing {
 // target hold T_world_cam0 of the host and target frames; bearing must have been built from host
 // (with_jacobian when jacobians are asked for). Works in homogeneous coordinates scaled by rho, so a
 // point at infinity (rho = 0) is fine. Returns false when the camera model cannot project it.
+// Without pose_jacobians only jacobians->d_landmark is set (what a residual in the host frame needs).
 inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const HostBearing& bearing,
                               const PoseMatrices& target, const PoseMatrices& cam0_cam, double rho, Eigen::Vector2d& uv,
-                              ReprojectionJacobians* jacobians = nullptr) {
+                              ReprojectionJacobians* jacobians = nullptr, bool pose_jacobians = true) {
   const Eigen::Matrix3d& R_w_h = host.R;
   const Eigen::Matrix3d& R_t_w = target.R_inv;
   const Eigen::Matrix3d& R_cam_cam0 = cam0_cam.R_inv;
@@ -96,11 +97,13 @@ inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMat
   if (jacobians != nullptr) {
     const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
     const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_cam0 * R_t_w;
-    jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
-    jacobians->d_host.rightCols<3>() = -d_uv_d_v * SO3d::hat(Rb_w);
-    jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
-    // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
-    jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
+    if (pose_jacobians) {
+      jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
+      jacobians->d_host.rightCols<3>() = -d_uv_d_v * SO3d::hat(Rb_w);
+      jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
+      // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
+      jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
+    }
     jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * bearing.d_b_d_s;
     jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * cam0_cam.t;
   }

@@ -50,13 +50,14 @@ class StereoResiduals {
     return r.allFinite();
   }
   // The same with the landmark's HostBearing, built from poses[lm.host] (with_jacobian when jac is
-  // asked for): what a pass over all of a landmark's residuals computes once.
+  // asked for): what a pass over all of a landmark's residuals computes once. Without
+  // pose_jacobians only jac->d_landmark is set.
   bool residual(const WindowPoses& poses, const HostBearing& bearing, const Landmark& lm, int frame, int cam,
-                Eigen::Vector2d& r, ReprojectionJacobians* jac) const {
+                Eigen::Vector2d& r, ReprojectionJacobians* jac, bool pose_jacobians = true) const {
     Eigen::Vector2d uv;
     const auto c = static_cast<std::size_t>(cam);
     if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)], bearing,
-                           poses[static_cast<std::size_t>(frame)], cam0_cam_[c], lm.rho, uv, jac)) {
+                           poses[static_cast<std::size_t>(frame)], cam0_cam_[c], lm.rho, uv, jac, pose_jacobians)) {
       return false;
     }
     r = uv - lm.px[static_cast<std::size_t>(frame)][c];

@@ -11,8 +11,6 @@ namespace {
 // A landmark whose outlier observations leave fewer than this many is dropped as a whole
 // (Basalt's filterOutliers(threshold, 4)): with so few views the remaining ones are suspect too.
 constexpr int kFilterMinObservations = 4;
-// Relative cost decrease below which LM stops.
-constexpr double kConvergedRelativeDecrease = 1e-6;
 // Regularisation of blocks that are inverted without damping (marginalisation); far below any
 // real information (a 1 px error at 1 m gives about 1e5 on the pose diagonal).
 constexpr double kTinyRegularization = 1e-9;
@@ -22,6 +20,7 @@ constexpr double kTinyRegularization = 1e-9;
 WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResiduals& model)
     : config_(config), model_(model) {
   lin_.resize(static_cast<std::size_t>(config_.max_landmarks));
+  H_pl_.resize(static_cast<std::size_t>(config_.max_landmarks) * kMaxWindowFrames);
 }
 
 // ---- single-frame pose step ---------------------------------------------------------------------
@@ -90,14 +89,17 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
   b.setZero();
   const std::vector<int>& list = only_landmarks != nullptr ? *only_landmarks : state.landmarks.alive();
   const WindowPoses poses = windowPoses(state.window);
-  for (const int i : list) {
-    const Landmark& lm = state.landmarks[i];
-    LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+  int next_block = 0;
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const Landmark& lm = state.landmarks[list[k]];
+    LandmarkLin& L = lin_[k];
     L.valid = false;
     if (!lm.alive) continue;
     L.H_ll.setZero();
     L.b_l.setZero();
     L.frames = 0;
+    L.first_block = next_block;
+    int blocks = 0;
     const int h = lm.host;
     const HostBearing bearing(poses[static_cast<std::size_t>(h)], lm.s, true);
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
@@ -105,15 +107,17 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
       const int t = bit / 2;
       Eigen::Vector2d r;
       ReprojectionJacobians J;
-      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J)) continue;
+      // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian.
+      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J, t != h)) continue;
       const double w = model_.weight(r.norm());
       L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
       L.b_l.noalias() += w * J.d_landmark.transpose() * r;
       L.valid = true;
-      if (t == h) continue;  // relative pose is the fixed extrinsic: no pose Jacobian
+      if (t == h) continue;
       for (const int f : {h, t}) {
         if ((L.frames & (1u << f)) == 0) {
-          L.H_pl[static_cast<std::size_t>(f)].setZero();
+          L.block[static_cast<std::size_t>(f)] = static_cast<std::uint8_t>(blocks++);
+          H_pl(L, f).setZero();
           L.frames |= 1u << f;
         }
       }
@@ -126,9 +130,10 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
       if (full_hessian || t > h) H.block<6, 6>(6 * t, 6 * h).noalias() += JtW * J.d_host;
       b.segment<6>(6 * h).noalias() += JhW * r;
       b.segment<6>(6 * t).noalias() += JtW * r;
-      L.H_pl[static_cast<std::size_t>(h)].noalias() += JhW * J.d_landmark;
-      L.H_pl[static_cast<std::size_t>(t)].noalias() += JtW * J.d_landmark;
+      H_pl(L, h).noalias() += JhW * J.d_landmark;
+      H_pl(L, t).noalias() += JtW * J.d_landmark;
     }
+    next_block += blocks;
   }
   state.prior.addTo(state.window, H, b);
 }
@@ -159,14 +164,13 @@ void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVecto
   }
   const std::vector<int>& alive = state.landmarks.alive();
   for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
-    const int i = alive[static_cast<std::size_t>(k)];
-    Landmark& lm = state.landmarks[i];
-    const LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+    Landmark& lm = state.landmarks[alive[static_cast<std::size_t>(k)]];
+    const LandmarkLin& L = lin_[static_cast<std::size_t>(k)];
     if (!lm.alive || !L.valid) continue;
     Eigen::Vector3d rhs = L.b_l;
     for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
       const int f = std::countr_zero(m);
-      rhs.noalias() += L.H_pl[static_cast<std::size_t>(f)].transpose() * dx.segment<6>(6 * f);
+      rhs.noalias() += H_pl(L, f).transpose() * dx.segment<6>(6 * f);
     }
     const Eigen::Vector3d dl = -L.H_ll_inv * rhs;
     lm.s += dl.head<2>();
@@ -197,9 +201,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       b_reduced_ = b_;
       for (int k = 0; k < kWindowDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
       for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
-        const int i = alive[static_cast<std::size_t>(k)];
-        LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
-        if (!state.landmarks[i].alive || !L.valid) continue;
+        LandmarkLin& L = lin_[static_cast<std::size_t>(k)];
+        if (!state.landmarks[alive[static_cast<std::size_t>(k)]].alive || !L.valid) continue;
         Eigen::Matrix3d H_ll = L.H_ll;
         for (int d = 0; d < 3; ++d) H_ll(d, d) += lambda * std::max(L.H_ll(d, d), 1e-6) + kTinyRegularization;
         L.H_ll_inv = H_ll.inverse();
@@ -210,14 +213,13 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         std::array<Mat63, kMaxWindowFrames> T;
         for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
           const int f = std::countr_zero(m);
-          T[static_cast<std::size_t>(f)].noalias() = L.H_pl[static_cast<std::size_t>(f)] * L.H_ll_inv;
+          T[static_cast<std::size_t>(f)].noalias() = H_pl(L, f) * L.H_ll_inv;
           b_reduced_.segment<6>(6 * f).noalias() -= T[static_cast<std::size_t>(f)] * L.b_l;
           // Slots g <= f: the bits of L.frames up to and including f.
           const std::uint32_t lower = L.frames & ((2u << f) - 1u);
           for (std::uint32_t n = lower; n != 0; n &= n - 1) {
             const int g = std::countr_zero(n);
-            H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -=
-                T[static_cast<std::size_t>(f)] * L.H_pl[static_cast<std::size_t>(g)].transpose();
+            H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -= T[static_cast<std::size_t>(f)] * H_pl(L, g).transpose();
           }
         }
       }
@@ -234,7 +236,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         const double next = cost(state);
         if (std::isfinite(next) && next <= current) {
           accepted = true;
-          converged = current - next <= kConvergedRelativeDecrease * current;
+          converged = current - next <= config_.converged_relative_decrease * current;
           current = next;
           if (config_.use_lm) lambda = std::max(config_.lm_lambda_min, lambda / 3.0);
           break;
@@ -296,18 +298,18 @@ void WindowOptimizer::filterOutliers(const WindowState& state) const {
 void WindowOptimizer::linearizeForMarginalization(const WindowState& state, const std::vector<int>& landmarks) {
   // Information on the window from the prior and the marginalised landmarks, landmarks eliminated.
   linearize(state, &landmarks, true);
-  for (const int i : landmarks) {
-    LandmarkLin& L = lin_[static_cast<std::size_t>(i)];
+  for (std::size_t k = 0; k < landmarks.size(); ++k) {
+    const LandmarkLin& L = lin_[k];
     if (!L.valid) continue;
     const Eigen::Matrix3d H_ll_inv = (L.H_ll + kTinyRegularization * Eigen::Matrix3d::Identity()).inverse();
     if (!H_ll_inv.allFinite()) continue;
     for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
       const int f = std::countr_zero(m);
-      const Mat63 T = L.H_pl[static_cast<std::size_t>(f)] * H_ll_inv;
+      const Mat63 T = H_pl(L, f) * H_ll_inv;
       b_.segment<6>(6 * f).noalias() -= T * L.b_l;
       for (std::uint32_t n = L.frames; n != 0; n &= n - 1) {
         const int g = std::countr_zero(n);
-        H_.block<6, 6>(6 * f, 6 * g).noalias() -= T * L.H_pl[static_cast<std::size_t>(g)].transpose();
+        H_.block<6, 6>(6 * f, 6 * g).noalias() -= T * H_pl(L, g).transpose();
       }
     }
   }

@@ -52,15 +52,21 @@ class WindowOptimizer {
 
  private:
   using Mat63 = Eigen::Matrix<double, 6, 3>;
-  // Per-landmark linearisation, kept for the Schur complement and back-substitution.
+  // Per-landmark linearisation, kept for the Schur complement and back-substitution. Its H_pl
+  // blocks (pose-landmark) live packed in H_pl_, only for the frames the landmark touches: a pass
+  // then streams through what it uses instead of a block for every window slot of every landmark.
   struct LandmarkLin {
     Eigen::Matrix3d H_ll;
     Eigen::Vector3d b_l;
     Eigen::Matrix3d H_ll_inv;  // damped
-    std::array<Mat63, kMaxWindowFrames> H_pl;
     std::uint32_t frames = 0;  // bit per frame slot with a non-zero H_pl
+    int first_block = 0;       // its blocks in H_pl_: first_block + block[frame slot]
+    std::array<std::uint8_t, kMaxWindowFrames> block{};
     bool valid = false;
   };
+  Mat63& H_pl(const LandmarkLin& L, int frame) {
+    return H_pl_[static_cast<std::size_t>(L.first_block + L.block[static_cast<std::size_t>(frame)])];
+  }
 
   // Normal equations of the residuals (all landmarks, or only_landmarks) plus the prior. Without
   // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads).
@@ -71,7 +77,8 @@ class WindowOptimizer {
 
   BackendConfig config_;
   StereoResiduals model_;
-  std::vector<LandmarkLin> lin_;
+  std::vector<LandmarkLin> lin_;  // by position in the landmark list of the last linearize()
+  std::vector<Mat63> H_pl_;
   // Work space (fixed size, so the solver never allocates).
   WindowMatrix H_, H_reduced_;
   WindowVector b_, b_reduced_, dx_;
