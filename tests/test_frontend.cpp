@@ -473,49 +473,59 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
 
 TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the finest levels only") {
   // 12 px/frame: the previous position needs the coarse levels, a vector within a pixel does not.
-  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(12.0, 5.0)};
-  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
-  const Eigen::Vector2f flow = seq.flow.cast<float>();
-  MotionField field(seq.kWidth, seq.kHeight);
-  struct Outcome {
-    int visible = 0, correct = 0, kept = 0;
-  };
-  const auto run = [&](int prior_pyramid_levels, const Eigen::Vector2f& vector_error) {
-    FrontendConfig config;
-    config.prior_mode = PriorMode::kMv;
-    config.prior_pyramid_levels = prior_pyramid_levels;
-    KltFrontend frontend(config, rig, {.max_points = 200});
-    uniformField(field, seq.kWidth, seq.kHeight, flow + vector_error, PictureType::kP);
-    TrackedStereoFrame frame;
-    FrontendStats stats;
-    for (int k = 0; k < 2; ++k) {
-      seq.render(k);
-      DecodedStereoFrame in = seq.input(k);
-      in.motion = {field, field};
-      in.has_motion = true;
-      frontend.track(in, frame, stats);
-    }
-    Outcome outcome;
-    outcome.kept = stats.temporal[0].kept;
-    for (const PointTrace& t : frontend.traces(0)) {
-      const Eigen::Vector2f truth = t.previous_px + flow;
-      outcome.visible +=
-          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
-      if (t.kept) outcome.correct += (t.tracked_px - truth).norm() < 0.1f;
-    }
-    return outcome;
-  };
-  // A vector within a pixel: level 0 alone finds the true position (80 %, as in the test above).
-  const Outcome close = run(0, Eigen::Vector2f(0.75f, -0.5f));
-  REQUIRE(close.visible >= 20);
-  CHECK(close.correct >= close.visible * 8 / 10);
-  CHECK(close.kept - close.correct <= 2);
-  // Off by 5 px: beyond level 0's reach (about 2 px; 1 of 47 here), within the whole pyramid's, so the
-  // key is what decides.
-  const Outcome far_finest = run(0, Eigen::Vector2f(5.f, 0.f));
-  const Outcome far_all = run(-1, Eigen::Vector2f(5.f, 0.f));
-  CHECK(far_finest.correct <= far_finest.visible / 4);
-  CHECK(far_all.correct >= far_all.visible * 3 / 4);  // 38 of 47 here; the rest leave the image or drift
+  // 40 px/frame: beyond the plain track's basin (see the bridging test), only the prior tracks.
+  for (const double speed : {12.0, 40.0}) {
+    PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(speed, 5.0)};
+    const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+    const Eigen::Vector2f flow = seq.flow.cast<float>();
+    MotionField field(seq.kWidth, seq.kHeight);
+    struct Outcome {
+      int visible = 0, correct = 0, kept = 0;
+    };
+    const auto run = [&](int prior_pyramid_levels, const Eigen::Vector2f& vector_error,
+                         PriorMode mode = PriorMode::kMv) {
+      FrontendConfig config;
+      config.prior_mode = mode;
+      config.prior_pyramid_levels = prior_pyramid_levels;
+      KltFrontend frontend(config, rig, {.max_points = 200});
+      uniformField(field, seq.kWidth, seq.kHeight, flow + vector_error, PictureType::kP);
+      TrackedStereoFrame frame;
+      FrontendStats stats;
+      for (int k = 0; k < 2; ++k) {
+        seq.render(k);
+        DecodedStereoFrame in = seq.input(k);
+        in.motion = {field, field};
+        in.has_motion = true;
+        frontend.track(in, frame, stats);
+      }
+      Outcome outcome;
+      outcome.kept = stats.temporal[0].kept;
+      for (const PointTrace& t : frontend.traces(0)) {
+        const Eigen::Vector2f truth = t.previous_px + flow;
+        outcome.visible +=
+            truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
+        if (t.kept) outcome.correct += (t.tracked_px - truth).norm() < 0.1f;
+      }
+      return outcome;
+    };
+    // A vector within a pixel: level 0 alone finds the true position (80 %, as in the test above).
+    const Outcome close = run(0, Eigen::Vector2f(0.75f, -0.5f));
+    REQUIRE(close.visible >= 20);
+    CHECK(close.correct >= close.visible * 8 / 10);
+    CHECK(close.kept - close.correct <= 2);
+    // Off by 5 px: beyond level 0's reach (about 2 px; 1 of 47 here), within the whole pyramid's, so the
+    // key is what decides.
+    const Outcome far_finest = run(0, Eigen::Vector2f(5.f, 0.f));
+    const Outcome far_all = run(-1, Eigen::Vector2f(5.f, 0.f));
+    CHECK(far_finest.correct <= far_finest.visible / 4);
+    CHECK(far_all.correct >= far_all.visible * 3 / 4);  // 38 of 47 here; the rest leave the image or drift
+    // of_then_mv's prior rescues what the plain track lost: it keeps the whole pyramid whatever the key.
+    const Outcome rescue_finest = run(0, Eigen::Vector2f(5.f, 0.f), PriorMode::kOfThenMv);
+    const Outcome rescue_all = run(-1, Eigen::Vector2f(5.f, 0.f), PriorMode::kOfThenMv);
+    CHECK(rescue_finest.correct == rescue_all.correct);
+    CHECK(rescue_finest.kept == rescue_all.kept);
+    CHECK(rescue_finest.correct >= rescue_finest.visible * 3 / 4);
+  }
 }
 
 TEST_CASE("frontend: a zero motion vector tracks exactly as no prior (the prior track runs once)") {

@@ -74,8 +74,9 @@ struct FrontendConfig {
   double prior_max_residual_px = 0.0;
   // Pyramid levels above full resolution on which a guess from a P-frame's motion vector is tracked
   // (forward and round trip); -1 = pyramid_levels. The vector usually lands within a pixel or two,
-  // which the finest levels capture without the coarse ones. Bridged vectors (carried over an I-frame)
-  // and the plain guess from the previous position always use pyramid_levels.
+  // which the finest levels capture without the coarse ones. Bridged vectors (carried over an I-frame),
+  // of_then_mv's rescue tracks and the plain guess from the previous position always use
+  // pyramid_levels.
   int prior_pyramid_levels = -1;
   // Also detect in the right image where the left camera does not see (cells whose reprojection
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
