@@ -304,6 +304,17 @@ struct PlaneSequence {
     in.frame_index = frame;
     return in;
   }
+  // Renders and tracks frames 0 .. frames-1, every one with the same motion field in both cameras.
+  void trackWithField(KltFrontend& frontend, int frames, const MotionField& field, TrackedStereoFrame& frame,
+                      FrontendStats& stats) {
+    for (int k = 0; k < frames; ++k) {
+      render(k);
+      DecodedStereoFrame in = input(k);
+      in.motion = {field, field};
+      in.has_motion = true;
+      frontend.track(in, frame, stats);
+    }
+  }
 };
 
 }  // namespace
@@ -491,13 +502,7 @@ TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the fi
       uniformField(field, seq.kWidth, seq.kHeight, flow + vector_error, PictureType::kP);
       TrackedStereoFrame frame;
       FrontendStats stats;
-      for (int k = 0; k < 2; ++k) {
-        seq.render(k);
-        DecodedStereoFrame in = seq.input(k);
-        in.motion = {field, field};
-        in.has_motion = true;
-        frontend.track(in, frame, stats);
-      }
+      seq.trackWithField(frontend, 2, field, frame, stats);
       Outcome outcome;
       outcome.kept = stats.temporal[0].kept;
       for (const PointTrace& t : frontend.traces(0)) {
@@ -541,13 +546,7 @@ TEST_CASE("frontend: a zero motion vector tracks exactly as no prior (the prior 
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame frame;
     FrontendStats stats;
-    for (int k = 0; k < 3; ++k) {
-      seq.render(k);
-      DecodedStereoFrame in = seq.input(k);
-      in.motion = {field, field};
-      in.has_motion = true;
-      frontend.track(in, frame, stats);
-    }
+    seq.trackWithField(frontend, 3, field, frame, stats);
     tracks[mode] = frame.observations[0];
     temporal[mode] = stats.temporal[0];
   }
@@ -584,13 +583,7 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame frame;
     FrontendStats stats;
-    for (int k = 0; k < 2; ++k) {
-      seq.render(k);
-      DecodedStereoFrame in = seq.input(k);
-      in.motion = {field, field};
-      in.has_motion = true;
-      frontend.track(in, frame, stats);
-    }
+    seq.trackWithField(frontend, 2, field, frame, stats);
     result[mode] = stats.temporal[0];
     if (mode == PriorMode::kMvParallelOf) {
       for (const PointTrace& t : frontend.traces(0)) {
