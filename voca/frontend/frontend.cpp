@@ -235,7 +235,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   // of_then_mv's, whose prior only rescues points the plain track lost: the hard ones, where a vector
   // that missed by a few pixels needs the coarse levels (measured: shortened there, it loses them).
   const bool whole_pyramid = stats.bridged[static_cast<std::size_t>(camera)] || mode == PriorMode::kOfThenMv;
-  const int prior_levels = whole_pyramid ? num_levels_ : prior_levels_;
+  const int prior_levels = whole_pyramid ? all_levels : prior_levels_;
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
