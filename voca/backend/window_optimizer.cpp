@@ -61,28 +61,40 @@ void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
 
 // ---- window optimisation ------------------------------------------------------------------------
 
-double WindowOptimizer::cost(const WindowState& state) const {
+double WindowOptimizer::residualCost(bool projected, double e) const {
   // An observation that cannot be projected counts like an error of 10x the outlier threshold, so
   // that a step moving points behind a camera is rejected.
-  const double invalid_e = 10.0 * config_.outlier_threshold_px;
+  return model_.cost(projected ? e : 10.0 * config_.outlier_threshold_px);
+}
+
+double WindowOptimizer::totalCost(const WindowState& state, std::size_t count) const {
+  double total = 0.0;
+  for (std::size_t k = count; k-- > 0;) total += lin_[k].cost;
+  return total + state.prior.cost(state.window);
+}
+
+double WindowOptimizer::cost(const WindowState& state) const {
   const LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = windowPoses(state.window);
   double total = 0.0;
+  // Per landmark, then over landmarks from the last: the order linearize() sums in (see totalCost).
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
     const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
     if (!lm.alive) continue;
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
+    double landmark_cost = 0.0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
-      const double e = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ? r.norm() : invalid_e;
-      total += model_.cost(e);
+      const bool projected = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr);
+      landmark_cost += residualCost(projected, projected ? r.norm() : 0.0);
     }
+    total += landmark_cost;
   }
   return total + state.prior.cost(state.window);
 }
 
-void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian) {
+double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian) {
   WindowMatrix& H = H_;
   WindowVector& b = b_;
   H.setZero();
@@ -94,6 +106,7 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
     const Landmark& lm = state.landmarks[list[k]];
     LandmarkLin& L = lin_[k];
     L.valid = false;
+    L.cost = 0.0;
     if (!lm.alive) continue;
     L.H_ll.setZero();
     L.b_l.setZero();
@@ -108,8 +121,13 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
       Eigen::Vector2d r;
       ReprojectionJacobians J;
       // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian.
-      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J, t != h)) continue;
-      const double w = model_.weight(r.norm());
+      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J, t != h)) {
+        L.cost += residualCost(false, 0.0);
+        continue;
+      }
+      const double e = r.norm();
+      L.cost += residualCost(true, e);
+      const double w = model_.weight(e);
       L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
       L.b_l.noalias() += w * J.d_landmark.transpose() * r;
       L.valid = true;
@@ -136,6 +154,7 @@ void WindowOptimizer::linearize(const WindowState& state, const std::vector<int>
     next_block += blocks;
   }
   state.prior.addTo(state.window, H, b);
+  return totalCost(state, list.size());
 }
 
 void WindowOptimizer::backup(const WindowState& state) {
@@ -181,16 +200,22 @@ void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVecto
 int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool filter) {
   double lambda = config_.lm_lambda_initial;
   bool filtered = !filter;
-  double current = cost(state);
   const std::vector<int>& alive = state.landmarks.alive();
+  // lin_, H_ and b_ hold the linearisation at the current state, whose cost is `current`. An
+  // accepted step is linearised right away when the next iteration starts there (no outlier filter
+  // in between): that pass also gives the cost the step is judged by, so no separate cost pass runs.
+  bool linearized = false;
+  double current = 0.0;
   int it = 0;
   for (; it < max_iterations; ++it) {
     if (!filtered && it >= config_.filter_iteration) {
       filterOutliers(state);
       filtered = true;
-      current = cost(state);
+      linearized = false;
     }
-    linearize(state, nullptr, false);
+    if (!linearized) current = linearize(state, nullptr, false);
+    const bool linearize_next = it + 1 < max_iterations && (filtered || it + 1 < config_.filter_iteration);
+    linearized = false;
     bool accepted = false;
     bool converged = false;
     for (int attempt = 0; attempt < 8; ++attempt) {
@@ -233,15 +258,19 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       if (dx_.allFinite()) {
         backup(state);
         applyIncrement(state, dx_);
-        const double next = cost(state);
+        const double next = linearize_next ? linearize(state, nullptr, false) : cost(state);
         if (std::isfinite(next) && next <= current) {
           accepted = true;
+          linearized = linearize_next;
           converged = current - next <= config_.converged_relative_decrease * current;
           current = next;
           if (config_.use_lm) lambda = std::max(config_.lm_lambda_min, lambda / 3.0);
           break;
         }
         restore(state);
+        // The next attempt eliminates and back-substitutes with the linearisation of the restored
+        // state, which the rejected step's pass overwrote (rare: almost every step is accepted).
+        if (linearize_next) linearize(state, nullptr, false);
       }
       if (!config_.use_lm || lambda >= config_.lm_lambda_max) break;
       lambda = std::min(config_.lm_lambda_max, lambda * 10.0);
@@ -251,7 +280,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         // Converged before the filter iteration: filter now and optimise the cleaned problem.
         filterOutliers(state);
         filtered = true;
-        current = cost(state);
+        linearized = false;
         continue;
       }
       ++it;

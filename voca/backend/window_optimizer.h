@@ -62,6 +62,7 @@ class WindowOptimizer {
     std::uint32_t frames = 0;  // bit per frame slot with a non-zero H_pl
     int first_block = 0;       // its blocks in H_pl_: first_block + block[frame slot]
     std::array<std::uint8_t, kMaxWindowFrames> block{};
+    double cost = 0.0;  // robust cost of the landmark's residuals at the linearisation point
     bool valid = false;
   };
   Mat63& H_pl(const LandmarkLin& L, int frame) {
@@ -69,8 +70,14 @@ class WindowOptimizer {
   }
 
   // Normal equations of the residuals (all landmarks, or only_landmarks) plus the prior. Without
-  // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads).
-  void linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian);
+  // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads). Returns the
+  // total cost at this point, equal to cost() (same terms, same order): LM's acceptance test of a
+  // step then needs no pass of its own when the next iteration linearises there anyway.
+  double linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian);
+  // Robust cost of one residual whose norm is e, or of one that cannot be projected.
+  double residualCost(bool projected, double e) const;
+  // The landmarks' costs summed in the one order cost() and linearize() share, plus the prior's.
+  double totalCost(const WindowState& state, std::size_t count) const;
   static void backup(const WindowState& state);
   static void restore(const WindowState& state);
   void applyIncrement(const WindowState& state, const WindowVector& dx);
