@@ -205,6 +205,36 @@ TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory")
   CHECK(max_r < 0.01);
 }
 
+TEST_CASE("backend: LM judges steps by the plain cost, and the window's cost never rises over iterations") {
+  // LM judges each step by the cost that the next linearisation computes along the way: it must be
+  // the plain cost pass (optimizeWindow(0)) to the bit, or a step that raises the true cost could
+  // pass (a term left out: the prior, the residuals that cannot be projected; another set summed).
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 1.0;
+  sc.seed = 5;
+  sc.duration_s = 3.0;
+  sc.motion_scale = 2.0;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  BackendConfig config;
+  config.max_iterations = 2;  // leave the window short of its optimum after every frame
+  VoEstimator estimator(config, rig);
+  int checked = 0;
+  for (std::size_t k = 0; k < seq.frames.size(); ++k) {
+    REQUIRE(estimator.process(seq.frames[k]).state != TrackingState::kLost);
+    if (k < 10 || k % 5 != 0) continue;
+    double previous = estimator.optimizeWindow(0);
+    CHECK(estimator.linearizedWindowCost() == previous);
+    for (int round = 0; round < 4; ++round) {
+      const double now = estimator.optimizeWindow(1);
+      CHECK(now <= previous);
+      previous = now;
+    }
+    ++checked;
+  }
+  CHECK(checked >= 8);
+}
+
 TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
   const StereoRig rig = synth::eurocRig();
   const SyntheticObservations seq = shortNoiseFreeSequence(rig);

@@ -419,6 +419,8 @@ double VoEstimator::optimizeWindow(int iterations) {
   return optimizer_.cost(state());
 }
 
+double VoEstimator::linearizedWindowCost() { return initialized_ ? optimizer_.linearizedCost(state()) : 0.0; }
+
 bool VoEstimator::dropViewsOfOldestKeyframe() {
   const int oldest = window_.oldestKeyframe();
   if (oldest < 0) return false;

@@ -87,6 +87,8 @@ class VoEstimator {
   // Runs up to `iterations` LM iterations on the current window (no outlier filter) and returns the
   // final cost; marginalizeOldestKeyframe() moves the oldest keyframe into the prior.
   double optimizeWindow(int iterations);
+  // The window's cost as LM's linearisation computes it: must equal optimizeWindow(0).
+  double linearizedWindowCost();
   bool marginalizeOldestKeyframe();
   // The reference for marginalisation: makes only the changes to observations that marginalising
   // the oldest keyframe makes (re-hosting, dropping its views of landmarks that stay) and keeps the

@@ -34,6 +34,9 @@ class WindowOptimizer {
   // Total cost: robust reprojection cost (an observation that cannot be projected counts like an
   // error of 10x the outlier threshold) plus the prior's.
   double cost(const WindowState& state) const;
+  // The same total as the LM linearisation computes it along the way (what steps are judged by);
+  // equals cost() exactly. Overwrites the optimiser's linearisation.
+  double linearizedCost(const WindowState& state) { return linearize(state, nullptr, false); }
   // Up to max_iterations LM iterations; with `filter`, outliers are removed at filter_iteration (or
   // on convergence, whichever comes first). Returns the iterations run.
   int optimize(const WindowState& state, int max_iterations, bool filter);
