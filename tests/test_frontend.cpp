@@ -601,6 +601,70 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
   CHECK(parallel.rescued == 0);
 }
 
+TEST_CASE("frontend: prior_agree_radius_px takes a vector landing next to the plain result as agreement, untracked") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  MotionField field(seq.kWidth, seq.kHeight);
+  struct Outcome {
+    std::vector<KeypointObservation> tracks;
+    TemporalStats temporal;
+  };
+  const auto run = [&](double radius, const Eigen::Vector2f& vector) {
+    FrontendConfig config;
+    config.prior_mode = PriorMode::kMvParallelOf;
+    config.prior_pyramid_levels = 1;  // as the euroc config: the prior track differs from the plain one
+    config.prior_agree_radius_px = radius;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    uniformField(field, seq.kWidth, seq.kHeight, vector, PictureType::kP);
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    seq.trackWithField(frontend, 3, field, frame, stats);
+    return Outcome{frame.observations[0], stats.temporal[0]};
+  };
+  // A vector 0.36 px off: every prior track would converge where the plain one did. With the radius
+  // none of them runs, and the output is the same bit for bit (the plain result is what is kept).
+  const Eigen::Vector2f close = flow + Eigen::Vector2f(0.3f, -0.2f);
+  const Outcome tracked = run(0.0, close);
+  const Outcome confirmed = run(1.0, close);
+  REQUIRE(tracked.tracks.size() >= 20);
+  CHECK(tracked.temporal.prior_confirmed == 0);
+  CHECK(tracked.temporal.consensus_rejections == 0);
+  CHECK(confirmed.temporal.prior_confirmed >= confirmed.temporal.kept * 9 / 10);
+  CHECK(confirmed.temporal.tracked_prior == tracked.temporal.tracked_prior);
+  CHECK(confirmed.temporal.kept == tracked.temporal.kept);
+  REQUIRE(confirmed.tracks.size() == tracked.tracks.size());
+  for (std::size_t i = 0; i < tracked.tracks.size(); ++i) {
+    CHECK(confirmed.tracks[i].track_id == tracked.tracks[i].track_id);
+    CHECK(confirmed.tracks[i].px == tracked.tracks[i].px);
+  }
+  // A vector 3 px off lands outside the radius: the prior track runs, and agrees.
+  const Outcome far = run(1.0, flow + Eigen::Vector2f(3.f, 0.f));
+  CHECK(far.temporal.prior_confirmed == 0);
+  CHECK(far.temporal.tracked_prior >= far.temporal.kept * 9 / 10);
+  CHECK(far.temporal.kept == tracked.temporal.kept);
+}
+
+TEST_CASE("frontend: prior_agree_radius_px leaves the consensus check of a wrong vector in place") {
+  // The repeated pattern of the consensus test: the wrong vector lands a period (24 px) away from
+  // the plain result, far outside the radius, so the prior track runs and the disagreement shows.
+  PlaneSequence seq{WaveTexture::periodic(9, 24), Eigen::Vector2d(1.2, 0.6)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  MotionField field(seq.kWidth, seq.kHeight);
+  uniformField(field, seq.kWidth, seq.kHeight, seq.flow.cast<float>() + Eigen::Vector2f(24.f, 0.f), PictureType::kP);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kMvParallelOf;
+  config.prior_agree_radius_px = 1.0;
+  KltFrontend frontend(config, rig, {.max_points = 200});
+  TrackedStereoFrame frame;
+  FrontendStats stats;
+  seq.trackWithField(frontend, 2, field, frame, stats);
+  const TemporalStats& t = stats.temporal[0];
+  REQUIRE(t.previous >= 15);
+  CHECK(t.prior_confirmed == 0);
+  CHECK(t.consensus_rejections >= t.previous / 2);
+}
+
 TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly predicting blocks count as absent") {
   // 40 px/frame: only a trusted prior tracks (mode mv falls back to the previous position, which
   // loses the motion), so what is distrusted shows in both the counter and the tracks.
