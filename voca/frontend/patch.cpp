@@ -61,11 +61,13 @@ const PatchPattern* patternBySize(int size) {
   return nullptr;
 }
 
-void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern) {
+void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern,
+                          PatchJacobian* jacobian) {
   size = pattern.size;
   valid = false;
   const int n = size;
   std::array<float, PatchPattern::kMaxSize> jpix[3];
+  alignas(32) PatchJacobian jac;
   float sum = 0.f;
   int count = 0;
   const float half = pattern.max_abs;
@@ -94,7 +96,8 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     jsum[c] = patch_kernels::sum<simd4::Native>(jpix[c].data(), n) / static_cast<float>(count);
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
-  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac);
+  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac.data());
+  if (jacobian != nullptr) *jacobian = jac;
   // H = J^T J from six float dot products over contiguous arrays.
   float h[3][3];
   for (int a = 0; a < 3; ++a)
