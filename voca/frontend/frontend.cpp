@@ -29,6 +29,14 @@ namespace {
 // tracks move less than this per frame.
 constexpr float kPrefetchMarginPx = 2.f;
 
+// Asks the memory system for the templates' bytes without waiting for them. A speed hint only.
+void prefetchTemplates(std::span<const PatchTemplate> templates) {
+  constexpr std::size_t kLineBytes = 64;  // a typical cache line
+  const auto* bytes = reinterpret_cast<const char*>(templates.data());
+  for (std::size_t offset = 0; offset < templates.size_bytes(); offset += kLineBytes)
+    __builtin_prefetch(bytes + offset);
+}
+
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -245,6 +253,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       // are larger than the cache and each patch is touched once per frame.
       prefetchPyramidPatch(to, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
       prefetchPyramidPatch(from, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
+      // And its templates, written a frame ago and long out of the nearer caches.
+      prefetchTemplates(cam.slot(cam.slots[i + 1]));
     }
     const MotionBlock* block = nullptr;
     if (field != nullptr)
