@@ -137,7 +137,8 @@ TEST_CASE("patch: analytic Jacobian of the normalised residual matches numerical
   for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
     const Eigen::Vector2f center(47.5f, 40.5f);  // cell centres: finite differences stay inside one cell
     PatchTemplate tmpl;
-    tmpl.build(view, center, *pattern);
+    PatchJacobian jac;
+    tmpl.build(view, center, *pattern, &jac);
     REQUIRE(tmpl.valid);
     const int n = pattern->size;
     const auto normalised = [&](const Eigen::Vector3f& xi, std::vector<double>& out) {
@@ -167,7 +168,7 @@ TEST_CASE("patch: analytic Jacobian of the normalised residual matches numerical
       for (int i = 0; i < n; ++i) {
         const auto k = static_cast<std::size_t>(i);
         const double numeric = (plus[k] - minus[k]) / (2.0 * eps[c]);
-        err2 += (numeric - tmpl.jac[c][k]) * (numeric - tmpl.jac[c][k]);
+        err2 += (numeric - jac[c][k]) * (numeric - jac[c][k]);
         norm2 += numeric * numeric;
       }
       INFO("pattern " << n << " column " << c);
@@ -179,7 +180,7 @@ TEST_CASE("patch: analytic Jacobian of the normalised residual matches numerical
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c)
         for (int i = 0; i < n; ++i)
-          product(r, c) += tmpl.step[r][static_cast<std::size_t>(i)] * tmpl.jac[c][static_cast<std::size_t>(i)];
+          product(r, c) += tmpl.step[r][static_cast<std::size_t>(i)] * jac[c][static_cast<std::size_t>(i)];
     CHECK((product - Eigen::Matrix3d::Identity()).norm() < 1e-4);
   }
 }
@@ -599,6 +600,70 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
   // In parallel, the wrong-copy matches are rejected by consensus.
   CHECK(parallel.consensus_rejections >= parallel.previous / 2);
   CHECK(parallel.rescued == 0);
+}
+
+TEST_CASE("frontend: prior_agree_radius_px takes a vector landing next to the plain result as agreement, untracked") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  MotionField field(seq.kWidth, seq.kHeight);
+  struct Outcome {
+    std::vector<KeypointObservation> tracks;
+    TemporalStats temporal;
+  };
+  const auto run = [&](double radius, const Eigen::Vector2f& vector) {
+    FrontendConfig config;
+    config.prior_mode = PriorMode::kMvParallelOf;
+    config.prior_pyramid_levels = 1;  // as the euroc config: the prior track differs from the plain one
+    config.prior_agree_radius_px = radius;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    uniformField(field, seq.kWidth, seq.kHeight, vector, PictureType::kP);
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    seq.trackWithField(frontend, 3, field, frame, stats);
+    return Outcome{frame.observations[0], stats.temporal[0]};
+  };
+  // A vector 0.36 px off: every prior track would converge where the plain one did. With the radius
+  // none of them runs, and the output is the same bit for bit (the plain result is what is kept).
+  const Eigen::Vector2f close = flow + Eigen::Vector2f(0.3f, -0.2f);
+  const Outcome tracked = run(0.0, close);
+  const Outcome confirmed = run(1.0, close);
+  REQUIRE(tracked.tracks.size() >= 20);
+  CHECK(tracked.temporal.prior_confirmed == 0);
+  CHECK(tracked.temporal.consensus_rejections == 0);
+  CHECK(confirmed.temporal.prior_confirmed >= confirmed.temporal.kept * 9 / 10);
+  CHECK(confirmed.temporal.tracked_prior == tracked.temporal.tracked_prior);
+  CHECK(confirmed.temporal.kept == tracked.temporal.kept);
+  REQUIRE(confirmed.tracks.size() == tracked.tracks.size());
+  for (std::size_t i = 0; i < tracked.tracks.size(); ++i) {
+    CHECK(confirmed.tracks[i].track_id == tracked.tracks[i].track_id);
+    CHECK(confirmed.tracks[i].px == tracked.tracks[i].px);
+  }
+  // A vector 3 px off lands outside the radius: the prior track runs, and agrees.
+  const Outcome far = run(1.0, flow + Eigen::Vector2f(3.f, 0.f));
+  CHECK(far.temporal.prior_confirmed == 0);
+  CHECK(far.temporal.tracked_prior >= far.temporal.kept * 9 / 10);
+  CHECK(far.temporal.kept == tracked.temporal.kept);
+}
+
+TEST_CASE("frontend: prior_agree_radius_px leaves the consensus check of a wrong vector in place") {
+  // The repeated pattern of the consensus test: the wrong vector lands a period (24 px) away from
+  // the plain result, far outside the radius, so the prior track runs and the disagreement shows.
+  PlaneSequence seq{WaveTexture::periodic(9, 24), Eigen::Vector2d(1.2, 0.6)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  MotionField field(seq.kWidth, seq.kHeight);
+  uniformField(field, seq.kWidth, seq.kHeight, seq.flow.cast<float>() + Eigen::Vector2f(24.f, 0.f), PictureType::kP);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kMvParallelOf;
+  config.prior_agree_radius_px = 1.0;
+  KltFrontend frontend(config, rig, {.max_points = 200});
+  TrackedStereoFrame frame;
+  FrontendStats stats;
+  seq.trackWithField(frontend, 2, field, frame, stats);
+  const TemporalStats& t = stats.temporal[0];
+  REQUIRE(t.previous >= 15);
+  CHECK(t.prior_confirmed == 0);
+  CHECK(t.consensus_rejections >= t.previous / 2);
 }
 
 TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly predicting blocks count as absent") {

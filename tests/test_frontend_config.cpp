@@ -50,12 +50,14 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(e.prior_mode == PriorMode::kMvParallelOf);
   CHECK(e.consensus_tolerance_px2 == 0.05);
   CHECK(e.bridge_iframes);
-  CHECK_FALSE(e.presmooth);  // not in the paper: off in its configurations
+  CHECK_FALSE(e.presmooth);               // not in the paper: off in its configurations
+  CHECK(e.prior_agree_radius_px == 1.0);  // ours (configs/README.md), a speed-up in every shipped config
   const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
   CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
   CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
   CHECK(tumvi.frontend.pattern == 52);
   CHECK(tumvi.frontend.detection_nonoverlap);
+  CHECK(tumvi.frontend.prior_agree_radius_px == 1.0);
   CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
@@ -122,6 +124,8 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   // At most the pyramid the plain guess uses; -1 means all of it.
   message = errorFor(R"({"frontend": {"pyramid_levels": 2, "prior_pyramid_levels": 3}})");
   CHECK(contains(message, "frontend.prior_pyramid_levels: expected an integer in [-1, 2], got 3"));
+  message = errorFor(R"({"frontend": {"prior_agree_radius_px": -0.5}})");
+  CHECK(contains(message, "frontend.prior_agree_radius_px: expected a number in [0,"));
 
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));

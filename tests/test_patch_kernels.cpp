@@ -280,6 +280,48 @@ TEST_CASE("patch kernels: template normalisation, native == portable == the per-
   }
 }
 
+TEST_CASE("patch kernels: fused H = J^T J and H^-1 J^T rows, native == portable == separate dots") {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> unit(0.f, 1.f), grad(-5.f, 5.f);
+  for (const int n : {24, 52}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::array<float, PatchPattern::kMaxSize> jac[3], value;
+      for (std::size_t k = 0; k < value.size(); ++k) {
+        value[k] = unit(rng) < 0.15f ? -1.f : 2.f * unit(rng);
+        for (auto& row : jac) row[k] = grad(rng);
+      }
+      float n_h[3][3], p_h[3][3];
+      kernels::gram3<simd4::Native>(jac, n, n_h);
+      kernels::gram3<simd4::Portable>(jac, n, p_h);
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+          const float expected = kernels::dot<simd4::Portable>(jac[a].data(), jac[b].data(), n);
+          CHECK(sameBits(n_h[a][b], expected));
+          CHECK(sameBits(p_h[a][b], expected));
+        }
+      }
+      float inverse[3][3];
+      for (auto& row : inverse)
+        for (float& x : row) x = grad(rng);
+      std::array<float, PatchPattern::kMaxSize> n_step[3], p_step[3];
+      float n_dots[3], p_dots[3];
+      kernels::stepRows<simd4::Native>(inverse, jac, value.data(), n, n_step, n_dots);
+      kernels::stepRows<simd4::Portable>(inverse, jac, value.data(), n, p_step, p_dots);
+      for (int r = 0; r < 3; ++r) {
+        for (int i = 0; i < n; ++i) {
+          const auto k = static_cast<std::size_t>(i);
+          const float expected = inverse[r][0] * jac[0][k] + inverse[r][1] * jac[1][k] + inverse[r][2] * jac[2][k];
+          CHECK(sameBits(n_step[r][k], expected));
+          CHECK(sameBits(p_step[r][k], expected));
+        }
+        const float expected_dot = kernels::dot<simd4::Portable>(p_step[r].data(), value.data(), n);
+        CHECK(sameBits(n_dots[r], expected_dot));
+        CHECK(sameBits(p_dots[r], expected_dot));
+      }
+    }
+  }
+}
+
 TEST_CASE("simd4: comparisons, select and lane bits agree with the portable backend") {
   using N = simd4::Native;
   using P = simd4::Portable;

@@ -29,6 +29,14 @@ namespace {
 // tracks move less than this per frame.
 constexpr float kPrefetchMarginPx = 2.f;
 
+// Asks the memory system for the templates' bytes without waiting for them. A speed hint only.
+void prefetchTemplates(std::span<const PatchTemplate> templates) {
+  constexpr std::size_t kLineBytes = 64;  // a typical cache line
+  const auto* bytes = reinterpret_cast<const char*>(templates.data());
+  for (std::size_t offset = 0; offset < templates.size_bytes(); offset += kLineBytes)
+    __builtin_prefetch(bytes + offset);
+}
+
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -224,6 +232,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   const ImagePyramid& to = cam.cur();
   const PriorMode mode = config_.prior_mode;
   const float tolerance = static_cast<float>(config_.consensus_tolerance_px2);
+  const float agree_radius2 = static_cast<float>(config_.prior_agree_radius_px * config_.prior_agree_radius_px);
   cam.next_ids.clear();
   cam.next_points.clear();
   cam.next_slots.clear();
@@ -244,6 +253,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       // are larger than the cache and each patch is touched once per frame.
       prefetchPyramidPatch(to, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
       prefetchPyramidPatch(from, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
+      // And its templates, written a frame ago and long out of the nearer caches.
+      prefetchTemplates(cam.slot(cam.slots[i + 1]));
     }
     const MotionBlock* block = nullptr;
     if (field != nullptr)
@@ -283,22 +294,22 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       return trackChecked(cam.slot(forward_slot), from, to, p, guess, levels, cam.slot(backward_slot), tracked);
     };
     if (mode == PriorMode::kMvParallelOf && run_prior) {
-      // Both forward tracks first. When they agree and the plain one passes its round trip, the
-      // point is kept from the plain track whatever the prior's round trip says, so that one is
-      // skipped; the outcome equals running both checks.
+      // The plain track first, with its round trip. When the prior's forward track agrees with a
+      // plain track that passed, the point is kept from the plain track whatever the prior's round
+      // trip says, so that one is skipped; the outcome equals running both checks.
       const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, all_levels, plain_px);
-      bool prior_forward = plain_forward;
-      if (same_start) {
-        prior_px = plain_px;
-      } else {
-        prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
-      }
-      const bool agree = plain_forward && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
       plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, all_levels, cam.slot(plain_slot));
-      prior_ok = same_start
-                     ? plain_ok
-                     : (agree && plain_ok) || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_levels,
-                                                                              cam.slot(prior_slot)));
+      const bool confirmed = plain_ok && agree_radius2 > 0.f && (p + mv - plain_px).squaredNorm() <= agree_radius2;
+      ts.prior_confirmed += confirmed && !same_start;
+      if (same_start || confirmed) {
+        prior_px = plain_px;
+        prior_ok = plain_ok;
+      } else {
+        const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
+        const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
+        prior_ok =
+            agree || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_levels, cam.slot(prior_slot)));
+      }
     } else {
       // The retry of the sequential modes runs only from a different start: from the same one it
       // would fail again.

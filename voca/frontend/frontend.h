@@ -37,7 +37,8 @@ struct TemporalStats {
   int lost = 0;
   int rescued = 0;  // kept from the prior after the plain track was tried and failed
   int consensus_rejections = 0;
-  int distrusted = 0;  // vectors the codec-confidence checks rejected (counted in with_vector too)
+  int distrusted = 0;       // vectors the codec-confidence checks rejected (counted in with_vector too)
+  int prior_confirmed = 0;  // prior tracks not run: the vector landed near the plain track's result
 };
 
 // What one call of KltFrontend::track did.

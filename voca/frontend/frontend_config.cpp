@@ -94,6 +94,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkInt(context, "prior_min_block_px", c.prior_min_block_px, 0, 64);
   checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
   checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
+  checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
 }
 
 }  // namespace voca

@@ -78,6 +78,11 @@ struct FrontendConfig {
   // of_then_mv's rescue tracks and the plain guess from the previous position always use
   // pyramid_levels.
   int prior_pyramid_levels = -1;
+  // mv_parallel_of: a motion-vector guess that lands within this distance (level-0 pixels) of the
+  // plain track's result, which passed its round trip, is taken as agreeing with it and not tracked.
+  // Started that close to a minimum the prior track converges to the same one, so running it only
+  // confirms; 0 = always track it (configs/README.md has the measurements).
+  double prior_agree_radius_px = 0.0;
   // Also detect in the right image where the left camera does not see (cells whose reprojection
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).

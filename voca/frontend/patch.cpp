@@ -61,11 +61,13 @@ const PatchPattern* patternBySize(int size) {
   return nullptr;
 }
 
-void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern) {
+void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern,
+                          PatchJacobian* jacobian) {
   size = pattern.size;
   valid = false;
   const int n = size;
   std::array<float, PatchPattern::kMaxSize> jpix[3];
+  alignas(32) PatchJacobian jac;
   float sum = 0.f;
   int count = 0;
   const float half = pattern.max_abs;
@@ -94,7 +96,8 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     jsum[c] = patch_kernels::sum<simd4::Native>(jpix[c].data(), n) / static_cast<float>(count);
   // n_i = v_i / mean with mean = sum_j v_j / count, so
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
-  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac);
+  patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac.data());
+  if (jacobian != nullptr) *jacobian = jac;
   // H = J^T J from six float dot products over contiguous arrays.
   float h[3][3];
   for (int a = 0; a < 3; ++a)
@@ -106,22 +109,18 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   const double det = hessian.determinant();
   // Scale-free test for an untextured (rank-deficient) patch.
   if (!(trace > 0.0) || !(det > 1e-9 * trace * trace * trace)) return;
-  // The inverse in double (H may be poorly conditioned), the rows of H^-1 J^T in float: plain
-  // loops over contiguous arrays that the compiler vectorises.
-  const Eigen::Matrix3f inverse = hessian.inverse().cast<float>();
-  for (int r = 0; r < 3; ++r) {
-    const float a = inverse(r, 0), b = inverse(r, 1), c = inverse(r, 2);
-    float* out = step[r].data();
-    const float *j0 = jac[0].data(), *j1 = jac[1].data(), *j2 = jac[2].data();
-    for (int i = 0; i < n; ++i) out[i] = a * j0[i] + b * j1[i] + c * j2[i];
-  }
+  // The inverse in double (H may be poorly conditioned), the rows of H^-1 J^T in float, with their
+  // dot products with the values (invalid points have a zero step, so their -1 marker adds nothing).
+  const Eigen::Matrix3f inverse_matrix = hessian.inverse().cast<float>();
+  float inverse[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) inverse[r][c] = inverse_matrix(r, c);
+  patch_kernels::stepRows<simd4::Native>(inverse, jac.data(), value.data(), n, step, step_dot_value);
   for (int i = n; i < PatchPattern::kMaxSize; ++i) {
     const auto k = static_cast<std::size_t>(i);
     value[k] = -1.f;
     step[0][k] = step[1][k] = step[2][k] = 0.f;
   }
-  // Invalid points have a zero step, so their -1 marker adds nothing.
-  for (int r = 0; r < 3; ++r) step_dot_value[r] = patch_kernels::dot<simd4::Native>(step[r].data(), value.data(), n);
   valid = true;
 }
 

@@ -61,23 +61,29 @@ inline Eigen::Vector3f sampleWithGradient(const FloatView& image, float x, float
   return {value, gx, gy};
 }
 
+// The Jacobian of a template's normalised residual with respect to an SE(2) increment (tx, ty, theta)
+// applied on the right of the warp, one row per parameter.
+using PatchJacobian = std::array<std::array<float, PatchPattern::kMaxSize>, 3>;
+
 // The template side of the alignment: mean-normalised intensities of the pattern around a point in
-// the reference image, the Jacobian of the normalised residual with respect to an SE(2) increment
-// (tx, ty, theta) applied on the right of the warp, and H^-1 J^T. Pattern points whose neighbourhood
-// leaves the image are marked invalid and contribute nothing. Arrays are contiguous, of fixed size,
-// so the per-iteration loops are plain vectorisable float loops.
+// the reference image and H^-1 J^T (J: the PatchJacobian). Pattern points whose neighbourhood leaves
+// the image are marked invalid and contribute nothing. Arrays are contiguous, of fixed size, so the
+// per-iteration loops are plain vectorisable float loops. The Jacobian itself is not kept: the
+// alignment needs only H^-1 J^T, and a template is written once per point, level and frame and read
+// the next frame, so its size is memory traffic.
 struct PatchTemplate {
   int size = 0;
   alignas(32) std::array<float, PatchPattern::kMaxSize> value{};    // normalised, -1 = invalid
-  alignas(32) std::array<float, PatchPattern::kMaxSize> jac[3]{};   // d residual / d (tx, ty, theta)
   alignas(32) std::array<float, PatchPattern::kMaxSize> step[3]{};  // rows of H^-1 J^T
   float step_dot_value[3]{};  // step[r] . value: lets an iteration skip forming the residual
   bool valid = false;
   bool all_points_valid = false;  // no point marked invalid: residuals may skip the per-point test
 
   // Samples the template at `center` (level pixels). valid is false when fewer than half of the
-  // points can be sampled, the patch is black or H is singular (no texture).
-  void build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern);
+  // points can be sampled, the patch is black or H is singular (no texture). `jacobian`, when given,
+  // receives J (for tests).
+  void build(const FloatView& image, const Eigen::Vector2f& center, const PatchPattern& pattern,
+             PatchJacobian* jacobian = nullptr);
 };
 
 // Normalised residual of the target patch under warp T (pattern offset q -> R q + t in the target

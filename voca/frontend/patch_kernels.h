@@ -249,6 +249,51 @@ void normaliseTemplate(int n, float inv_mean, const float* jsum, float* value,
   }
 }
 
+// The six distinct entries of H = J^T J in one pass over the three Jacobian rows: h[a][b] (a <= b,
+// mirrored into h[b][a]) equals dot<V>(jac[a], jac[b], n) bit for bit (same lanes, same order).
+template <class V>
+void gram3(const std::array<float, PatchPattern::kMaxSize>* jac, int n, float h[3][3]) {
+  using F = typename V::F;
+  F h00 = V::set1(0.f), h01 = h00, h02 = h00, h11 = h00, h12 = h00, h22 = h00;
+  for (int i = 0; i < n; i += 4) {
+    const F j0 = V::load(jac[0].data() + i), j1 = V::load(jac[1].data() + i), j2 = V::load(jac[2].data() + i);
+    h00 = V::add(h00, V::mul(j0, j0));
+    h01 = V::add(h01, V::mul(j0, j1));
+    h02 = V::add(h02, V::mul(j0, j2));
+    h11 = V::add(h11, V::mul(j1, j1));
+    h12 = V::add(h12, V::mul(j1, j2));
+    h22 = V::add(h22, V::mul(j2, j2));
+  }
+  h[0][0] = V::sum(h00);
+  h[0][1] = h[1][0] = V::sum(h01);
+  h[0][2] = h[2][0] = V::sum(h02);
+  h[1][1] = V::sum(h11);
+  h[1][2] = h[2][1] = V::sum(h12);
+  h[2][2] = V::sum(h22);
+}
+
+// The rows of H^-1 J^T, step[r]_i = (inverse[r][0] jac[0]_i + inverse[r][1] jac[1]_i) +
+// inverse[r][2] jac[2]_i, and step_dot_value[r] = dot<V>(step[r], value, n) bit for bit, in one pass.
+template <class V>
+void stepRows(const float inverse[3][3], const std::array<float, PatchPattern::kMaxSize>* jac, const float* value,
+              int n, std::array<float, PatchPattern::kMaxSize>* step, float* step_dot_value) {
+  using F = typename V::F;
+  F w[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) w[r][c] = V::set1(inverse[r][c]);
+  F acc[3] = {V::set1(0.f), V::set1(0.f), V::set1(0.f)};
+  for (int i = 0; i < n; i += 4) {
+    const F j0 = V::load(jac[0].data() + i), j1 = V::load(jac[1].data() + i), j2 = V::load(jac[2].data() + i);
+    const F v = V::load(value + i);
+    for (int r = 0; r < 3; ++r) {
+      const F row = V::add(V::add(V::mul(w[r][0], j0), V::mul(w[r][1], j1)), V::mul(w[r][2], j2));
+      V::store(step[r].data() + i, row);
+      acc[r] = V::add(acc[r], V::mul(row, v));
+    }
+  }
+  for (int r = 0; r < 3; ++r) step_dot_value[r] = V::sum(acc[r]);
+}
+
 // sum_i a_i b_i over n points.
 template <class V>
 float dot(const float* a, const float* b, int n) {
