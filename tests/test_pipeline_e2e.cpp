@@ -160,6 +160,30 @@ TEST_CASE("pipeline e2e: pipelined runs write the single-threaded trajectory byt
   }
 }
 
+TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its input") {
+  // The struct defaults are the paper's values; the shipped files differ where a measurement chose
+  // otherwise (configs/README.md), and `voca run` promises the shipped euroc file by default.
+  const pipeline::RunConfig euroc = pipeline::resolveRunConfig(std::nullopt);
+  CHECK(euroc.name == "euroc (built in)");
+  CHECK(euroc.config.frontend.prior_pyramid_levels == builtinConfig("euroc").frontend.prior_pyramid_levels);
+  CHECK(euroc.config.frontend.prior_agree_radius_px == builtinConfig("euroc").frontend.prior_agree_radius_px);
+  CHECK(euroc.config.frontend.prior_pyramid_levels != FrontendConfig{}.prior_pyramid_levels);
+  const pipeline::RunConfig kitti = pipeline::resolveRunConfig(std::nullopt, true);
+  CHECK(kitti.name == "kitti (built in)");
+  CHECK(kitti.config.frontend.matching_default_depth_m == builtinConfig("kitti").frontend.matching_default_depth_m);
+  CHECK(pipeline::resolveRunConfig(fs::path("tumvi")).config.backend.use_lm == builtinConfig("tumvi").backend.use_lm);
+  CHECK_THROWS_AS(pipeline::resolveRunConfig(fs::path("no-such-config.json")), InputError);
+
+  // And the run itself: no --config writes what --config euroc writes, byte for byte.
+  test::ScratchDir dir("pipeline-default-config");
+  pipeline::VoRunOptions options = quietRun(rendered().video, dir / "default.txt", 1);
+  REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
+  options.trajectory_file = dir / "euroc.txt";
+  options.config = fs::path("euroc");
+  REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
+  CHECK(fileText(dir / "default.txt") == fileText(dir / "euroc.txt"));
+}
+
 TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --strict stops naming the frame") {
   test::ScratchDir dir("pipeline-damaged");
   const fs::path video = dir / "video";

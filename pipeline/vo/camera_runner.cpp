@@ -57,10 +57,10 @@ VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, platform
   if (rig.cameras.size() < 2) {
     throw InputError(fmt::format("{}: need a stereo calibration", options.calibration.string()));
   }
-  VocaConfig config = options.config ? loadConfig(*options.config) : VocaConfig{};
+  const RunConfig config = resolveRunConfig(options.config);
   const std::unique_ptr<StereoSource> source = openCameras(options.cameras, io);
-  VoRunResult result = runVisualOdometryOn(*source, rig, config, options.run);
-  result.config_name = options.config ? options.config->string() : "euroc (built in)";
+  VoRunResult result = runVisualOdometryOn(*source, rig, config.config, options.run);
+  result.config_name = config.name;
   const std::vector<std::string> warnings = warningsOf(*source);
   result.warnings.insert(result.warnings.begin(), warnings.begin(), warnings.end());
   if (!options.run.statistics_file.empty()) writeStatisticsJson(result, options.run.statistics_file);

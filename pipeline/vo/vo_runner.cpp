@@ -94,6 +94,13 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
   return true;
 }
 
+RunConfig resolveRunConfig(const std::optional<std::filesystem::path>& config, bool kitti_input) {
+  if (config) return {loadConfig(*config), config->string()};
+  // KITTI's street scenes and 0.54 m baseline put the paper's 2 m stereo guess ~190 px off.
+  const std::string name = kitti_input ? "kitti" : "euroc";
+  return {builtinConfig(name), name + " (built in)"};
+}
+
 namespace {
 
 // `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.
@@ -107,7 +114,8 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   if (rig.cameras.size() < 2) {
     throw InputError(fmt::format("{}: need a stereo calibration", options.calibration->string()));
   }
-  VocaConfig config = options.config ? loadConfig(*options.config) : VocaConfig{};
+  const RunConfig resolved = resolveRunConfig(options.config);
+  const VocaConfig& config = resolved.config;
   std::optional<Trajectory> gt;
   if (options.ground_truth) gt = loadTrajectory(*options.ground_truth);
   NetworkSourceOptions network;
@@ -131,7 +139,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   NetworkStereoSource& source = *opened;
   VoRunResult run = runVisualOdometryOn(source, rig, config, options, gt,
                                         options.ground_truth ? options.ground_truth->string() : std::string());
-  run.config_name = options.config ? options.config->string() : "euroc (built in)";
+  run.config_name = resolved.name;
   run.source_end = source.endReason();
   if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
   return run;
@@ -144,13 +152,9 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;
-  // KITTI's street scenes and 0.54 m baseline put the paper's 2 m stereo guess ~190 px off, so a
-  // KITTI folder without an explicit config gets the shipped KITTI setting.
-  const bool kitti_default = !options.config && raw.layout == DatasetLayout::kKitti;
-  result.config = options.config ? loadConfig(*options.config) : kitti_default ? builtinConfig("kitti") : VocaConfig{};
-  result.config_name = options.config  ? options.config->string()
-                       : kitti_default ? "kitti (built in)"
-                                       : "euroc (built in)";
+  RunConfig resolved = resolveRunConfig(options.config, raw.layout == DatasetLayout::kKitti);
+  result.config = std::move(resolved.config);
+  result.config_name = std::move(resolved.name);
   if (options.mode) result.config.frontend.prior_mode = *options.mode;
   if (options.bridge_iframes) result.config.frontend.bridge_iframes = *options.bridge_iframes;
   const std::optional<std::filesystem::path> calibration = options.calibration ? options.calibration : raw.calibration;

@@ -89,6 +89,16 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested);
 
+// The configuration a run uses and the name reports give it: the file or shipped name asked for,
+// else the shipped config for the input (configs/kitti_vo.json for a KITTI folder, whose street scenes
+// need its stereo guess; configs/euroc_vo.json for everything else). The shipped file, not the
+// struct defaults: where the two differ, the shipped file is the measured choice.
+struct RunConfig {
+  VocaConfig config;
+  std::string name;
+};
+RunConfig resolveRunConfig(const std::optional<std::filesystem::path>& config, bool kitti_input = false);
+
 // Throws InputError for bad input found before the run starts (missing dataset, calibration or
 // config; images that do not match the calibration). A stage failing during the run does not throw:
 // the result carries it in pipeline.error, with everything estimated up to then.
