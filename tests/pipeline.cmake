@@ -16,3 +16,5 @@ voca_add_test(test_decode_stage SOURCES test_decode_stage.cpp
               LIBS voca_pipeline_stages voca_drivers_encode LABELS asan TIMEOUT 120)
 # The visualisations (track overlay, motion-vector plot) on known inputs.
 voca_add_test(test_overlay SOURCES test_overlay.cpp LIBS voca_pipeline_sinks LABELS asan)
+# The statistics sink's guess-distance histogram on known samples.
+voca_add_test(test_statistics SOURCES test_statistics.cpp LIBS voca_pipeline_sinks)

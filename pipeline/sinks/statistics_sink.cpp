@@ -1,7 +1,10 @@
 #include "pipeline/sinks/statistics_sink.h"
 
+#include <fmt/core.h>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace voca::pipeline {
 
@@ -18,9 +21,14 @@ double DistanceHistogram::quantile(double q) const {
   std::int64_t seen = 0;
   for (int b = 0; b <= kBins; ++b) {
     seen += bins_[static_cast<std::size_t>(b)];
-    if (seen > rank) return (b + 0.5) * kBinPx;
+    if (seen > rank) return b < kBins ? (b + 0.5) * kBinPx : std::numeric_limits<double>::infinity();
   }
-  return kBins * kBinPx;
+  return std::numeric_limits<double>::infinity();
+}
+
+std::string DistanceHistogram::formatQuantile(double q) const {
+  const double value = quantile(q);
+  return std::isinf(value) ? fmt::format("> {:g}", kRangePx) : fmt::format("{:.3f}", value);
 }
 
 StatisticsSink::StatisticsSink(std::size_t row_capacity, int decode_stage, int frontend_stage, int backend_stage)

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "pipeline/sinks/sink_stage.h"
@@ -18,10 +19,14 @@ class DistanceHistogram {
  public:
   static constexpr double kBinPx = 0.01;
   static constexpr int kBins = 1600;
+  static constexpr double kRangePx = kBinPx * kBins;  // the overflow bin holds what lies beyond
   void record(double px);
   std::int64_t count() const { return count_; }
-  // Midpoint of the bin holding the sample of rank round(q * (count - 1)); 0 when empty.
+  // Midpoint of the bin holding the sample of rank round(q * (count - 1)); 0 when empty; infinity
+  // when that sample lies beyond kRangePx (fast motion: the previous position is often that far off).
   double quantile(double q) const;
+  // quantile(q) for people: "1.234", or "> 16" beyond the range.
+  std::string formatQuantile(double q) const;
   // Counts per bin, the overflow bin last.
   const std::array<std::int64_t, kBins + 1>& bins() const { return bins_; }
 

@@ -424,10 +424,10 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
   }
   if (t.guess_prior.count() > 0) {
     fmt::print(out,
-               "guess to converged distance (px, {} kept tracks with a vector): previous position median {:.3f} p90 "
-               "{:.3f}; MV prior median {:.3f} p90 {:.3f}\n",
-               t.guess_prior.count(), t.guess_plain.quantile(0.5), t.guess_plain.quantile(0.9),
-               t.guess_prior.quantile(0.5), t.guess_prior.quantile(0.9));
+               "guess to converged distance (px, {} kept tracks with a vector): previous position median {} p90 "
+               "{}; MV prior median {} p90 {}\n",
+               t.guess_prior.count(), t.guess_plain.formatQuantile(0.5), t.guess_plain.formatQuantile(0.9),
+               t.guess_prior.formatQuantile(0.5), t.guess_prior.formatQuantile(0.9));
   }
   if (const StageReport* frontend = findStage(r.pipeline, "frontend")) {
     fmt::print(out,
