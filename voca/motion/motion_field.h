@@ -51,13 +51,14 @@ struct OutlierParams {
 // The motion field of one frame. Capacity (max image size) is fixed at construction; reset(),
 // addBlock(), setQp(), finalize(), copyFrom() and flagOutliers() never allocate afterwards. Lookups go
 // through a grid of kCellPx x kCellPx cells holding the index of the block covering each cell
-// (past references win over future ones), so blockAt() is O(1); a second grid of the same cells
-// holds the quantiser (qpAt()).
+// (past references win over future ones), so blockAt() is O(1); a second grid, one cell per 16x16
+// macroblock, holds the quantiser (qpAt()), which codecs set per macroblock.
 class MotionField {
  public:
   static constexpr int kCellPx = 4;
   static constexpr std::int32_t kNoBlock = -1;
   static constexpr std::int16_t kNoQp = -1;
+  static constexpr int kQpCellPx = 16;
 
   MotionField() = default;
   MotionField(int max_width, int max_height);
@@ -82,7 +83,7 @@ class MotionField {
   bool addBlock(int x, int y, int w, int h, float dx, float dy, RefDirection ref = RefDirection::kPast);
 
   // Record the quantiser of a coding block (a macroblock: the rectangle may reach outside the image
-  // and is clipped; cells whose centre it contains take qp). Values outside [0, 32767] are refused
+  // and is clipped; the kQpCellPx cells whose centre it contains take qp). Values outside [0, 32767] are refused
   // (returns false). Call between reset() and finalize(); cells never set stay kNoQp.
   bool setQp(int x, int y, int w, int h, int qp);
 
@@ -100,7 +101,7 @@ class MotionField {
   // The quantiser of the coding block covering pixel (x, y), or kNoQp (not exported, outside). O(1).
   std::int16_t qpAt(int x, int y) const {
     if (!has_qp_ || x < 0 || y < 0 || x >= width_ || y >= height_) return kNoQp;
-    return qp_grid_[static_cast<std::size_t>(y / kCellPx) * grid_stride_ + x / kCellPx];
+    return qp_grid_[static_cast<std::size_t>(y / kQpCellPx) * qp_stride_ + x / kQpCellPx];
   }
   bool hasQp() const { return has_qp_; }
   // Forward flow at a sub-pixel position in pixel-centre coordinates ((0, 0) is the centre of the
@@ -129,6 +130,7 @@ class MotionField {
   PictureType type_ = PictureType::kUnknown;
   std::vector<MotionBlock> blocks_;
   std::vector<std::int32_t> grid_;
+  std::size_t qp_stride_ = 0;
   std::vector<std::int16_t> qp_grid_;  // valid when has_qp_ (set by the first setQp() of the frame)
   bool has_qp_ = false;
   // Scratch for flagOutliers(), sized at construction.
