@@ -72,9 +72,10 @@ std::vector<GrayImage> render(const WaveTexture& texture, const Motion& to_textu
 }
 
 void encode(const std::filesystem::path& path, const std::vector<GrayImage>& frames, const std::string& codec,
-            bool two_pass = true, std::int64_t bitrate_bps = 2000000) {
+            bool two_pass = true, std::int64_t bitrate_bps = 2000000, const std::string& extra_x264_params = "") {
   voca::encode::EncoderSettings settings;
   settings.two_pass = two_pass;
+  settings.x264_params += extra_x264_params;
   settings.codec = codec;              // libx264 keeps the paper's x264 parameters (quarter-pel, no B-frames)
   settings.bitrate_bps = bitrate_bps;  // default ~1 bit/pixel/frame: rate control does not starve vectors
   voca::encode::encodeVideoFile(path, settings, [&](const std::function<void(voca::GrayView)>& emit) {
@@ -218,6 +219,69 @@ TEST_CASE("skipping the deblocking filter keeps the vectors exact and changes on
   CHECK(differing_pixels > 0);
 }
 
+TEST_CASE("H.264 macroblock quantisers: exported per block and per position, as the encoder chose them") {
+  voca::test::ScratchDir dir("decode-qp");
+  const WaveTexture texture(7);
+  const Motion motion = [](const Eigen::Vector2d& p, int k) {
+    return Eigen::Vector2d(p.x() - 1.5 * k, p.y() - 0.75 * k);
+  };
+  const std::vector<GrayImage> images = render(texture, motion);
+
+  SUBCASE("constant QP: every P-frame block and position carries exactly the encoder's QP") {
+    for (const int qp : {20, 40}) {
+      CAPTURE(qp);
+      // x264 constant-quantiser mode: P-frames at qp, no adaptive quantisation; I-frames a few lower (ipratio).
+      encode(dir / "q.mp4", images, "libx264", false, 2000000, ":qp=" + std::to_string(qp));
+      const std::vector<DecodedFrame> frames = decodeAll(dir / "q.mp4");
+      REQUIRE(frames.size() == std::size_t(kFrames));
+      // The I-frame has no vectors but its quantisers, below the P-frames'.
+      REQUIRE(frames[0].motion.hasQp());
+      const int intra_qp = frames[0].motion.qpAt(kWidth / 2, kHeight / 2);
+      CHECK(intra_qp >= qp - 6);
+      CHECK(intra_qp < qp);
+      for (int k = 1; k < kFrames; ++k) {
+        CAPTURE(k);
+        const voca::MotionField& field = frames[k].motion;
+        REQUIRE(field.hasVectors());
+        REQUIRE(field.hasQp());
+        int wrong_blocks = 0, wrong_pixels = 0;
+        for (const voca::MotionBlock& b : field.blocks()) wrong_blocks += b.qp != qp;
+        // Every pixel, the right and bottom edges included (192 and 256 are whole macroblocks).
+        for (int y = 0; y < kHeight; ++y)
+          for (int x = 0; x < kWidth; ++x) wrong_pixels += field.qpAt(x, y) != qp;
+        CHECK(wrong_blocks == 0);
+        CHECK(wrong_pixels == 0);
+        CHECK(field.qpAt(-1, 0) == voca::MotionField::kNoQp);
+        CHECK(field.qpAt(kWidth, 0) == voca::MotionField::kNoQp);
+      }
+    }
+  }
+  SUBCASE("rate control: QPs stay in H.264's 0..51 and are higher at a low bitrate than at a high one") {
+    double mean_qp[2] = {0, 0};
+    const std::int64_t rates[2] = {100000, 4000000};
+    for (int r = 0; r < 2; ++r) {
+      CAPTURE(rates[r]);
+      encode(dir / "r.mp4", images, "libx264", false, rates[r]);
+      const std::vector<DecodedFrame> frames = decodeAll(dir / "r.mp4");
+      REQUIRE(frames.size() == std::size_t(kFrames));
+      int blocks = 0, out_of_range = 0;
+      double sum = 0;
+      for (int k = 1; k < kFrames; ++k) {
+        for (const voca::MotionBlock& b : frames[k].motion.blocks()) {
+          out_of_range += b.qp < 0 || b.qp > 51;
+          sum += b.qp;
+          ++blocks;
+        }
+      }
+      REQUIRE(blocks > 200);
+      CHECK(out_of_range == 0);
+      mean_qp[r] = sum / blocks;
+    }
+    MESSAGE("mean P-frame block QP: " << mean_qp[0] << " at 100 kbit/s, " << mean_qp[1] << " at 4 Mbit/s");
+    CHECK(mean_qp[0] > mean_qp[1] + 5.0);
+  }
+}
+
 TEST_CASE("H.264 vectors of a small rotation match the true motion") {
   voca::test::ScratchDir dir("decode-rotation");
   const WaveTexture texture(23);
@@ -260,6 +324,9 @@ TEST_CASE("MPEG-4 Part 2 and MPEG-2 streams give motion vectors through the same
       CAPTURE(k);
       CHECK(frames[k].motion.pictureType() == voca::PictureType::kP);
       CHECK(frames[k].motion.hasVectors());
+      // The MPEG-2-style quantiser scale (1..31 with the linear scale) comes along too.
+      REQUIRE(frames[k].motion.hasQp());
+      for (const voca::MotionBlock& b : frames[k].motion.blocks()) CHECK((b.qp >= 1 && b.qp <= 112));
     }
     // These codecs use half-pel vectors (1.5, 1.0 is representable), so the tolerance is one half-pel step.
     const Agreement a = compare(frames, motion, 0.5);

@@ -64,6 +64,7 @@ struct Reference {
   GrayImage luma;
   std::vector<MotionBlock> blocks;
   PictureType type = PictureType::kUnknown;
+  int centre_qp = MotionField::kNoQp;
 };
 
 std::vector<DecodedFrame> decodeAll(VideoDecoder& decoder, const std::vector<Packet>& packets) {
@@ -164,7 +165,11 @@ void checkSame(const DecodedFrame& got, const Reference& want) {
     CHECK(blocks[i].y == want.blocks[i].y);
     CHECK(blocks[i].dx == want.blocks[i].dx);
     CHECK(blocks[i].dy == want.blocks[i].dy);
+    CHECK(blocks[i].qp == want.blocks[i].qp);
   }
+  // The stand-in's pixels carry no side data: the quantisers come from the software parse.
+  CHECK(got.motion.hasQp());
+  CHECK(got.motion.qpAt(kWidth / 2, kHeight / 2) == want.centre_qp);
 }
 
 }  // namespace
@@ -175,11 +180,15 @@ TEST_CASE("hardware pixels get the vectors of their own packet when the device r
   {
     VideoDecoder software(encoded.stream, softwareOptions());
     for (const DecodedFrame& f : decodeAll(software, encoded.packets)) {
-      reference[f.pts] =
-          Reference{f.luma, {f.motion.blocks().begin(), f.motion.blocks().end()}, f.motion.pictureType()};
+      reference[f.pts] = Reference{f.luma,
+                                   {f.motion.blocks().begin(), f.motion.blocks().end()},
+                                   f.motion.pictureType(),
+                                   f.motion.qpAt(kWidth / 2, kHeight / 2)};
     }
   }
   REQUIRE(reference.size() == static_cast<std::size_t>(kFrames));
+  // Every picture, I-frames included, has its quantisers, in H.264's range.
+  for (const auto& [pts, ref] : reference) CHECK((ref.centre_qp >= 0 && ref.centre_qp <= 51));
 
   constexpr std::int64_t kSwap = 4, kDrop = 9;
   VideoDecoder paired(encoded.stream, softwareOptions(), std::make_unique<StandInDecoder>(kSwap, kDrop), "stand-in");

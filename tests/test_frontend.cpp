@@ -680,8 +680,10 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
     int visible = 0;        // previous points whose true position stays inside the image
   };
   // `odd` returns a replacement vector for a block at (x, y), or nothing to keep `coded`.
+  // `qp`, when given, sets the quantiser of the block at (x, y).
   const auto run = [&](const FrontendConfig& base, int block_px,
-                       const std::function<std::optional<Eigen::Vector2f>(int, int)>& odd) {
+                       const std::function<std::optional<Eigen::Vector2f>(int, int)>& odd,
+                       const std::function<int(int, int)>& qp = {}) {
     FrontendConfig config = base;
     config.prior_mode = PriorMode::kMv;
     KltFrontend frontend(config, rig, {.max_points = 200});
@@ -697,6 +699,7 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
         for (int x = 0; x < seq.kWidth; x += block_px) {
           const Eigen::Vector2f v = odd(x, y).value_or(coded);
           field.addBlock(x, y, block_px, block_px, v.x(), v.y());
+          if (qp) field.setQp(x, y, block_px, block_px, qp(x, y));
         }
       }
       field.finalize();
@@ -747,6 +750,35 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
     REQUIRE(odd_points >= 1);
     CHECK(stats.distrusted == odd_points);
     CHECK(correct >= (visible - odd_points) * 8 / 10);
+  }
+  SUBCASE("prior_max_qp: exactly the vectors of blocks quantised above the threshold are distrusted") {
+    // One macroblock in four (a checkerboard of 2x2 groups) at QP 40, the rest at 30. `odd` keeps
+    // the coded vector and only marks the QP-40 blocks, so odd_points counts the points in them.
+    const auto coarse = [](int x, int y) { return (x / 32 + y / 32) % 2 == 0 && (x / 16) % 2 == 0; };
+    const auto mark = [&](int x, int y) {
+      return coarse(x, y) ? std::optional<Eigen::Vector2f>(coded) : std::optional<Eigen::Vector2f>();
+    };
+    const auto qp = [&](int x, int y) { return coarse(x, y) ? 40 : 30; };
+    FrontendConfig config;
+    config.prior_max_qp = 35;
+    const auto [stats, correct, odd_points, visible] = run(config, 16, mark, qp);
+    REQUIRE(stats.previous >= 20);
+    REQUIRE(odd_points >= 3);
+    REQUIRE(odd_points < stats.with_vector);
+    CHECK(stats.distrusted == odd_points);
+    CHECK(correct >= (visible - odd_points) * 8 / 10);
+    CHECK(correct <= visible - odd_points / 2);  // the distrusted ones lose the 40 px motion
+    // At the QP itself a vector is kept; above every QP nothing is distrusted, and 0 turns the check off.
+    config.prior_max_qp = 40;
+    CHECK(run(config, 16, mark, qp).stats.distrusted == 0);
+    config.prior_max_qp = 29;
+    const TemporalStats all = run(config, 16, mark, qp).stats;
+    CHECK(all.distrusted == all.with_vector);
+    config.prior_max_qp = 0;
+    CHECK(run(config, 16, mark, qp).stats.distrusted == 0);
+    // Vectors without a quantiser (not exported) are trusted whatever the threshold.
+    config.prior_max_qp = 1;
+    CHECK(run(config, 16, mark).stats.distrusted == 0);
   }
   SUBCASE("prior_max_residual_px: a vector whose prediction does not match is distrusted, a good one kept") {
     FrontendConfig config;

@@ -66,6 +66,8 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(empty.frontend.prior_mode == e.prior_mode);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_mode": "none", "pattern": 24}})"), "x")
             .frontend.prior_mode == PriorMode::kNone);
+  CHECK(empty.frontend.prior_max_qp == 0);  // the QP check is off unless asked for
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_max_qp": 51}})"), "x").frontend.prior_max_qp == 51);
 }
 
 TEST_CASE("config: unknown keys, wrong types and out-of-range values name the key and the allowed values") {
@@ -109,6 +111,12 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.prior_min_block_px"));
   message = errorFor(R"({"frontend": {"prior_max_residual_px": -0.5}})");
   CHECK(contains(message, "frontend.prior_max_residual_px"));
+  message = errorFor(R"({"frontend": {"prior_max_qp": -1}})");
+  CHECK(contains(message, "frontend.prior_max_qp: expected an integer in [0, 127], got -1"));
+  message = errorFor(R"({"frontend": {"prior_max_qp": 128}})");
+  CHECK(contains(message, "frontend.prior_max_qp: expected an integer in [0, 127], got 128"));
+  message = errorFor(R"({"frontend": {"prior_max_qp": 30.5}})");
+  CHECK(contains(message, "frontend.prior_max_qp"));
   message = errorFor(R"({"frontend": {"prior_reject_inconsistent": "yes"}})");
   CHECK(contains(message, "frontend.prior_reject_inconsistent: expected true or false"));
   message = errorFor(R"({"frontend": {"bridge_iframes": 1}})");

@@ -147,6 +147,53 @@ TEST_CASE("I-frames and reset fields have no vectors; capacity is fixed") {
   CHECK_FALSE(field.addBlock(64, 0, 16, 16, 0.f, 0.f));
 }
 
+TEST_CASE("macroblock quantisers: looked up by position, given to the blocks, cleared by reset, copied") {
+  // 60x40: the last macroblock column and row are cut by the image edge, as in 1241x376 KITTI.
+  MotionField field(64, 48);
+  field.reset(60, 40, PictureType::kP);
+  CHECK_FALSE(field.hasQp());
+  CHECK(field.qpAt(0, 0) == MotionField::kNoQp);
+  // Macroblock (mx, my) gets QP 10 + 4 * my + mx; (3, 2) is left out: no quantiser exported there.
+  for (int my = 0; my < 3; ++my)
+    for (int mx = 0; mx < 4; ++mx)
+      if (mx != 3 || my != 2) CHECK(field.setQp(16 * mx, 16 * my, 16, 16, 10 + 4 * my + mx));
+  CHECK_FALSE(field.setQp(0, 0, 16, 16, -1));
+  CHECK_FALSE(field.setQp(0, 0, 16, 16, 40000));
+  REQUIRE(field.addBlock(16, 0, 8, 16, 1.f, 0.f));    // left half of macroblock (1, 0)
+  REQUIRE(field.addBlock(56, 16, 8, 8, 0.f, 1.f));    // clipped to 4x8 by the right edge, in (3, 1)
+  REQUIRE(field.addBlock(48, 32, 16, 16, 0.f, 0.f));  // in (3, 2), which has no quantiser
+  field.finalize();
+  REQUIRE(field.hasQp());
+  int wrong = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 60; ++x) {
+      const int mx = x / 16, my = y / 16;
+      wrong += field.qpAt(x, y) != (mx == 3 && my == 2 ? MotionField::kNoQp : 10 + 4 * my + mx);
+    }
+  CHECK(wrong == 0);
+  CHECK(field.qpAt(60, 0) == MotionField::kNoQp);
+  CHECK(field.qpAt(0, -1) == MotionField::kNoQp);
+  CHECK(field.blocks()[0].qp == 11);
+  CHECK(field.blocks()[1].qp == 17);
+  CHECK(field.blocks()[2].qp == MotionField::kNoQp);
+
+  MotionField copy(64, 48);
+  copy.copyFrom(field);
+  CHECK(copy.qpAt(20, 20) == 15);
+  CHECK(copy.blocks()[0].qp == 11);
+
+  // The next frame starts without quantisers, and a frame that sets one clears the rest.
+  field.reset(60, 40, PictureType::kP);
+  field.finalize();
+  CHECK_FALSE(field.hasQp());
+  CHECK(field.qpAt(20, 20) == MotionField::kNoQp);
+  field.reset(60, 40, PictureType::kP);
+  field.setQp(0, 0, 16, 16, 30);
+  field.finalize();
+  CHECK(field.qpAt(5, 5) == 30);
+  CHECK(field.qpAt(20, 20) == MotionField::kNoQp);
+}
+
 TEST_CASE("copies keep the full capacity, so a copied field still takes a whole frame") {
   MotionField field(64, 48);
   field.reset(64, 48, PictureType::kP);

@@ -1,6 +1,7 @@
 #include "drivers/decode/video_decoder.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <mutex>
@@ -14,6 +15,7 @@ extern "C" {
 #include <libavutil/hwcontext.h>
 #include <libavutil/motion_vector.h>
 #include <libavutil/pixdesc.h>
+#include <libavutil/video_enc_params.h>
 }
 
 namespace voca::decode {
@@ -83,6 +85,26 @@ void setExtradata(AVCodecContext* ctx, const StreamInfo& stream) {
   if (ctx->extradata == nullptr) throw RuntimeFailure("out of memory copying codec headers");
   std::memcpy(ctx->extradata, stream.extradata.data(), size);
   ctx->extradata_size = static_cast<int>(size);
+}
+
+// The per-macroblock quantiser of a decoded picture (AV_FRAME_DATA_VIDEO_ENC_PARAMS) into `motion`.
+// H.264 and the MPEG-2-style codecs give each block's final quantiser as the frame value plus the
+// block's delta; other types (VP9's segment deltas) mean something else and are left out.
+void readQp(const AVFrame& frame, MotionField& motion) {
+  const AVFrameSideData* side = av_frame_get_side_data(&frame, AV_FRAME_DATA_VIDEO_ENC_PARAMS);
+  if (side == nullptr || side->size < sizeof(AVVideoEncParams)) return;
+  auto* params = reinterpret_cast<AVVideoEncParams*>(side->data);
+  if (params->type != AV_VIDEO_ENC_PARAMS_H264 && params->type != AV_VIDEO_ENC_PARAMS_MPEG2) return;
+  // The block array must lie inside the side data (av_video_enc_params_block does not check).
+  if (params->nb_blocks == 0 || params->block_size < sizeof(AVVideoBlockParams) || params->blocks_offset > side->size ||
+      (side->size - params->blocks_offset) / params->block_size < params->nb_blocks) {
+    return;
+  }
+  for (unsigned int i = 0; i < params->nb_blocks; ++i) {
+    const AVVideoBlockParams* block = av_video_enc_params_block(params, i);
+    const std::int64_t qp = std::int64_t{params->qp} + block->delta_qp;
+    if (qp >= 0 && qp <= INT16_MAX) motion.setQp(block->src_x, block->src_y, block->w, block->h, static_cast<int>(qp));
+  }
 }
 
 }  // namespace
@@ -234,7 +256,10 @@ CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   // One thread, slice threading only: frame threading delays output and costs memory per thread.
   ctx->thread_count = 1;
   ctx->thread_type = FF_THREAD_SLICE;
-  if (options.export_motion || motion_only) ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
+  // The quantiser of each macroblock beside its vectors: how coarsely the encoder coded the block, a
+  // confidence signal for the vector (frontend prior_max_qp).
+  if (options.export_motion || motion_only)
+    ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS | AV_CODEC_EXPORT_DATA_VIDEO_ENC_PARAMS;
   // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
   if (motion_only || options.skip_loop_filter) ctx->skip_loop_filter = AVDISCARD_ALL;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
@@ -510,6 +535,7 @@ void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, 
                             mv.source < 0 ? RefDirection::kPast : RefDirection::kFuture);
       }
     }
+    readQp(vectors, out.motion);
   }
   out.motion.finalize();
   ++frames_out;

@@ -57,6 +57,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_reject_inconsistent", &FrontendConfig::prior_reject_inconsistent},
     {"prior_min_block_px", &FrontendConfig::prior_min_block_px},
     {"prior_max_residual_px", &FrontendConfig::prior_max_residual_px},
+    {"prior_max_qp", &FrontendConfig::prior_max_qp},
     {"prior_pyramid_levels", &FrontendConfig::prior_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},

@@ -198,6 +198,7 @@ bool KltFrontend::trustVector(const MotionBlock& block, const CameraState& cam, 
   if (config_.prior_reject_inconsistent && block.outlier) return false;
   const int min_side = config_.prior_min_block_px;
   if (block.w * block.h < min_side * min_side) return false;
+  if (config_.prior_max_qp > 0 && block.qp > config_.prior_max_qp) return false;
   if (config_.prior_max_residual_px <= 0.0) return true;
   // How well the vector predicts the point's 8x8 neighbourhood: the mean absolute difference between
   // the previous image around p and the current image around p + vector (bilinear), divided by the

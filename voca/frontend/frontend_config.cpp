@@ -93,6 +93,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkReal(context, "consensus_tolerance_px2", c.consensus_tolerance_px2, 0.0, 1e4, false);
   checkInt(context, "prior_min_block_px", c.prior_min_block_px, 0, 64);
   checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
+  checkInt(context, "prior_max_qp", c.prior_max_qp, 0, 127);  // H.264's 51, MPEG-2's non-linear scale 112
   checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
   checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
 }

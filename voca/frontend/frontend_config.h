@@ -69,9 +69,14 @@ struct FrontendConfig {
   //    the current image at the point plus the vector, over the neighbourhood's mean gradient, i.e.
   //    the vector's apparent misalignment in pixels (0 = off). The decoded images' stand-in for the
   //    residual energy the bitstream carries but FFmpeg does not export.
+  //  - prior_max_qp: vectors of macroblocks quantised more coarsely than this (codec units: H.264 QP
+  //    0..51; 0 = off): the encoder spent few bits there, so the block's prediction residual was
+  //    left large and its vector is a cheap match rather than the true motion. Vectors without an
+  //    exported quantiser are kept.
   bool prior_reject_inconsistent = false;
   int prior_min_block_px = 0;
   double prior_max_residual_px = 0.0;
+  int prior_max_qp = 0;
   // Pyramid levels above full resolution on which a guess from a P-frame's motion vector is tracked
   // (forward and round trip); -1 = pyramid_levels. The vector usually lands within a pixel or two,
   // which the finest levels capture without the coarse ones. Bridged vectors (carried over an I-frame),

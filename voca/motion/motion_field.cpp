@@ -20,6 +20,19 @@ float medianOf(float* values, std::size_t n) {
   return 0.5f * (lower + upper);
 }
 
+// The cells of a grid of kCell-pixel cells (cells_x by cells_y) whose centre lies in the rectangle
+// [x, right) x [y, bottom): half-open ranges [cx0, cx1) x [cy0, cy1).
+struct CellRange {
+  int cx0, cx1, cy0, cy1;
+};
+template <int kCell>
+CellRange cellsOf(int x, int y, int right, int bottom, int cells_x, int cells_y) {
+  return {std::max(0, floorDiv(x - kCell / 2 + kCell - 1, kCell)),
+          std::min(cells_x, floorDiv(right - 1 - kCell / 2, kCell) + 1),
+          std::max(0, floorDiv(y - kCell / 2 + kCell - 1, kCell)),
+          std::min(cells_y, floorDiv(bottom - 1 - kCell / 2, kCell) + 1)};
+}
+
 }  // namespace
 
 const char* pictureTypeName(PictureType type) {
@@ -44,6 +57,9 @@ MotionField::MotionField(int max_width, int max_height) : max_width_(max_width),
   // At most one block per 4x4 cell and reference direction (the smallest codec partition).
   blocks_.reserve(2 * cells);
   grid_.assign(cells, kNoBlock);
+  qp_grid_.assign(static_cast<std::size_t>((max_width + kQpCellPx - 1) / kQpCellPx) *
+                      static_cast<std::size_t>((max_height + kQpCellPx - 1) / kQpCellPx),
+                  kNoQp);
   scratch_x_.resize(2 * cells);
   scratch_y_.resize(2 * cells);
   visit_stamp_.assign(2 * cells, 0);
@@ -69,8 +85,10 @@ void MotionField::reset(int width, int height, PictureType type) {
   width_ = width;
   height_ = height;
   grid_stride_ = static_cast<std::size_t>((width + kCellPx - 1) / kCellPx);
+  qp_stride_ = static_cast<std::size_t>((width + kQpCellPx - 1) / kQpCellPx);
   type_ = type;
   blocks_.clear();
+  has_qp_ = false;  // the QP grid is cleared by the frame's first setQp(), so frames without QP pay nothing
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height + kCellPx - 1) / kCellPx);
   std::fill_n(grid_.begin(), static_cast<std::ptrdiff_t>(cells), kNoBlock);
 }
@@ -106,16 +124,37 @@ void MotionField::finalize() {
       int right = b.x + b.w, bottom = b.y + b.h;
       if (right >= width_) right = cells_x * kCellPx;
       if (bottom >= height_) bottom = cells_y * kCellPx;
-      const int cx0 = std::max(0, floorDiv(b.x - kCellPx / 2 + kCellPx - 1, kCellPx));
-      const int cx1 = std::min(cells_x, floorDiv(right - 1 - kCellPx / 2, kCellPx) + 1);
-      const int cy0 = std::max(0, floorDiv(b.y - kCellPx / 2 + kCellPx - 1, kCellPx));
-      const int cy1 = std::min(cells_y, floorDiv(bottom - 1 - kCellPx / 2, kCellPx) + 1);
-      for (int cy = cy0; cy < cy1; ++cy) {
+      const CellRange r = cellsOf<kCellPx>(b.x, b.y, right, bottom, cells_x, cells_y);
+      for (int cy = r.cy0; cy < r.cy1; ++cy) {
         std::int32_t* row = grid_.data() + static_cast<std::size_t>(cy) * grid_stride_;
-        for (int cx = cx0; cx < cx1; ++cx) row[cx] = static_cast<std::int32_t>(i);
+        for (int cx = r.cx0; cx < r.cx1; ++cx) row[cx] = static_cast<std::int32_t>(i);
       }
     }
   }
+  // A codec partition never straddles macroblocks, so any pixel of the block gives its quantiser.
+  for (MotionBlock& b : blocks_) b.qp = qpAt(b.x + b.w / 2, b.y + b.h / 2);
+}
+
+bool MotionField::setQp(int x, int y, int w, int h, int qp) {
+  if (qp < 0 || qp > 32767) return false;
+  const int cells_x = static_cast<int>(qp_stride_);
+  const int cells_y = (height_ + kQpCellPx - 1) / kQpCellPx;
+  if (!has_qp_) {
+    std::fill_n(qp_grid_.begin(), static_cast<std::ptrdiff_t>(qp_stride_ * static_cast<std::size_t>(cells_y)), kNoQp);
+    has_qp_ = true;
+  }
+  // Clipped like addBlock(), and extended to the grid edge at the right/bottom image border as in finalize().
+  const int x0 = std::max(x, 0), y0 = std::max(y, 0);
+  int right = std::min(x + w, width_), bottom = std::min(y + h, height_);
+  if (right <= x0 || bottom <= y0) return true;
+  if (right >= width_) right = cells_x * kQpCellPx;
+  if (bottom >= height_) bottom = cells_y * kQpCellPx;
+  const CellRange r = cellsOf<kQpCellPx>(x0, y0, right, bottom, cells_x, cells_y);
+  for (int cy = r.cy0; cy < r.cy1; ++cy) {
+    std::int16_t* row = qp_grid_.data() + static_cast<std::size_t>(cy) * qp_stride_;
+    std::fill(row + r.cx0, row + std::max(r.cx0, r.cx1), static_cast<std::int16_t>(qp));
+  }
+  return true;
 }
 
 std::optional<Eigen::Vector2f> MotionField::forwardFlowAt(float x, float y) const {
@@ -142,6 +181,12 @@ void MotionField::copyFrom(const MotionField& other) {
   blocks_.assign(other.blocks_.begin(), other.blocks_.end());
   const std::size_t cells = grid_stride_ * static_cast<std::size_t>((height_ + kCellPx - 1) / kCellPx);
   std::copy_n(other.grid_.begin(), static_cast<std::ptrdiff_t>(cells), grid_.begin());
+  qp_stride_ = other.qp_stride_;
+  has_qp_ = other.has_qp_;
+  if (has_qp_) {
+    const std::size_t qp_cells = qp_stride_ * static_cast<std::size_t>((height_ + kQpCellPx - 1) / kQpCellPx);
+    std::copy_n(other.qp_grid_.begin(), static_cast<std::ptrdiff_t>(qp_cells), qp_grid_.begin());
+  }
 }
 
 int MotionField::flagOutliers(const OutlierParams& params) {

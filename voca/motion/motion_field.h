@@ -28,6 +28,9 @@ struct MotionBlock {
   float dx = 0.f, dy = 0.f;
   RefDirection ref = RefDirection::kPast;
   bool outlier = false;  // set by MotionField::flagOutliers()
+  // The quantiser of the macroblock holding the block's centre (codec units: H.264 QP 0..51, MPEG-2/4
+  // quantiser scale), or kNoQp when the decoder did not export it. Set by MotionField::finalize().
+  std::int16_t qp = -1;
 
   // Centre in pixel-centre coordinates ((0, 0) is the centre of the top-left pixel): a 16-pixel
   // block at x = 0 has its centre at 7.5.
@@ -46,13 +49,16 @@ struct OutlierParams {
 };
 
 // The motion field of one frame. Capacity (max image size) is fixed at construction; reset(),
-// addBlock(), finalize(), copyFrom() and flagOutliers() never allocate afterwards. Lookups go
+// addBlock(), setQp(), finalize(), copyFrom() and flagOutliers() never allocate afterwards. Lookups go
 // through a grid of kCellPx x kCellPx cells holding the index of the block covering each cell
-// (past references win over future ones), so blockAt() is O(1).
+// (past references win over future ones), so blockAt() is O(1); a second grid, one cell per 16x16
+// macroblock, holds the quantiser (qpAt()), which codecs set per macroblock.
 class MotionField {
  public:
   static constexpr int kCellPx = 4;
   static constexpr std::int32_t kNoBlock = -1;
+  static constexpr std::int16_t kNoQp = -1;
+  static constexpr int kQpCellPx = 16;
 
   MotionField() = default;
   MotionField(int max_width, int max_height);
@@ -76,7 +82,13 @@ class MotionField {
   // outside the image or the block capacity is used up.
   bool addBlock(int x, int y, int w, int h, float dx, float dy, RefDirection ref = RefDirection::kPast);
 
-  // Rasterise the blocks into the lookup grid. Call once after the last addBlock() of a frame.
+  // Record the quantiser of a coding block (a macroblock: the rectangle may reach outside the image
+  // and is clipped; the kQpCellPx cells whose centre it contains take qp). Values outside [0, 32767] are refused
+  // (returns false). Call between reset() and finalize(); cells never set stay kNoQp.
+  bool setQp(int x, int y, int w, int h, int qp);
+
+  // Rasterise the blocks into the lookup grid and give each block the quantiser at its centre. Call
+  // once after the last addBlock() and setQp() of a frame.
   void finalize();
 
   // The block covering pixel (x, y), or nullptr for "no vector" (intra block, I-frame, uncovered
@@ -86,6 +98,12 @@ class MotionField {
     const std::int32_t index = grid_[static_cast<std::size_t>(y / kCellPx) * grid_stride_ + x / kCellPx];
     return index == kNoBlock ? nullptr : &blocks_[static_cast<std::size_t>(index)];
   }
+  // The quantiser of the coding block covering pixel (x, y), or kNoQp (not exported, outside). O(1).
+  std::int16_t qpAt(int x, int y) const {
+    if (!has_qp_ || x < 0 || y < 0 || x >= width_ || y >= height_) return kNoQp;
+    return qp_grid_[static_cast<std::size_t>(y / kQpCellPx) * qp_stride_ + x / kQpCellPx];
+  }
+  bool hasQp() const { return has_qp_; }
   // Forward flow at a sub-pixel position in pixel-centre coordinates ((0, 0) is the centre of the
   // top-left pixel, so pixel (i, j) spans [i - 0.5, i + 0.5) x [j - 0.5, j + 0.5)): the block of the
   // pixel containing it, or nullopt for "no vector".
@@ -112,6 +130,9 @@ class MotionField {
   PictureType type_ = PictureType::kUnknown;
   std::vector<MotionBlock> blocks_;
   std::vector<std::int32_t> grid_;
+  std::size_t qp_stride_ = 0;
+  std::vector<std::int16_t> qp_grid_;  // valid when has_qp_ (set by the first setQp() of the frame)
+  bool has_qp_ = false;
   // Scratch for flagOutliers(), sized at construction.
   std::vector<float> scratch_x_, scratch_y_;
   std::vector<std::uint32_t> visit_stamp_;
