@@ -84,10 +84,11 @@ void encode(const std::filesystem::path& path, const std::vector<GrayImage>& fra
 }
 
 std::vector<DecodedFrame> decodeAll(const std::filesystem::path& path, std::vector<std::int64_t> t_ns = {},
-                                    bool skip_loop_filter = false) {
+                                    bool skip_loop_filter = false, bool export_qp = true) {
   voca::decode::DecoderOptions options;
   options.kind = voca::decode::DecoderKind::kSoftware;
   options.skip_loop_filter = skip_loop_filter;
+  options.export_qp = export_qp;
   voca::decode::VideoReader reader(path, std::move(t_ns), options);
   std::vector<DecodedFrame> frames;
   DecodedFrame frame;
@@ -253,6 +254,14 @@ TEST_CASE("H.264 macroblock quantisers: exported per block and per position, as 
         CHECK(wrong_pixels == 0);
         CHECK(field.qpAt(-1, 0) == voca::MotionField::kNoQp);
         CHECK(field.qpAt(kWidth, 0) == voca::MotionField::kNoQp);
+      }
+      // Not asked for, not exported: the same vectors and no quantisers.
+      const std::vector<DecodedFrame> without = decodeAll(dir / "q.mp4", {}, false, false);
+      REQUIRE(without.size() == frames.size());
+      for (std::size_t k = 1; k < without.size(); ++k) {
+        CHECK_FALSE(without[k].motion.hasQp());
+        CHECK(without[k].motion.qpAt(kWidth / 2, kHeight / 2) == voca::MotionField::kNoQp);
+        CHECK(without[k].motion.blocks().size() == frames[k].motion.blocks().size());
       }
     }
   }

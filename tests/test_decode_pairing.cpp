@@ -148,6 +148,7 @@ DecoderOptions softwareOptions() {
   DecoderOptions options;
   options.kind = DecoderKind::kSoftware;
   options.log_choice = false;
+  options.export_qp = true;  // the quantisers travel with the vectors too
   return options;
 }
 

@@ -293,12 +293,12 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
     CHECK(statistics.frames() == kFrames);
     // FFmpeg reference-counts every packet and picture: libavformat reads each packet into a new
     // buffer (av_get_packet: the AVBufferRef and its data, plus the demuxer's own bookkeeping), and
-    // libavcodec wraps every decoded picture, its references and the exported motion vectors and
-    // quantisers (frame side data) in AVBufferRef objects, allocated per frame and freed when the
-    // frame is released. Measured with Debian 12's FFmpeg 5.1: 7 per camera and frame in the demuxer,
-    // about 45 per camera and frame in the decoder (5 of them for the quantisers). The bounds leave
-    // 2x for other FFmpeg builds, while a per-macroblock allocation (300 macroblocks per picture
-    // here) fails.
+    // libavcodec wraps every decoded picture, its references and the exported motion vectors (frame
+    // side data; the quantisers too, when prior_max_qp asks for them) in AVBufferRef objects, allocated
+    // per frame and freed when the frame is released. Measured with Debian 12's FFmpeg 5.1: 7 per
+    // camera and frame in the demuxer, about 40 per camera and frame in the decoder (5 more with the
+    // quantisers). The bounds leave 2x for other FFmpeg builds, while a per-macroblock allocation
+    // (300 macroblocks per picture here) fails.
     CHECK(counted_read.tally.ffmpeg > 0);
     CHECK(perFrame(counted_read.tally) <= 28.0);
     CHECK(counted_decode.tally.ffmpeg > 0);

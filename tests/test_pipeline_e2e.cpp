@@ -184,6 +184,25 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   CHECK(fileText(dir / "default.txt") == fileText(dir / "euroc.txt"));
 }
 
+TEST_CASE("pipeline e2e: prior_max_qp reaches the decoder: the quantisers are exported and the check distrusts") {
+  // The decoder exports quantisers only when the config's check reads them; a run with the check on
+  // must see them (no QP would silently trust every vector), a run with it off must not pay for them.
+  test::ScratchDir dir("pipeline-qp");
+  std::ofstream(dir / "qp.json") << R"({"frontend": {"prior_max_qp": 1}})";
+  pipeline::VoRunOptions options = quietRun(rendered().video, dir / "qp.txt", 1);
+  options.config = dir / "qp.json";
+  const pipeline::VoRunResult strict = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(strict.pipeline.error);
+  REQUIRE(strict.frontend.with_vector > 0);
+  // QP 1 is below anything x264 chooses at 500 kbit/s: every vector with a quantiser is distrusted.
+  CHECK(strict.frontend.distrusted == strict.frontend.with_vector);
+  options.config = std::nullopt;
+  options.trajectory_file = dir / "off.txt";
+  const pipeline::VoRunResult off = pipeline::runVisualOdometry(options);
+  CHECK(off.frontend.with_vector > 0);
+  CHECK(off.frontend.distrusted == 0);
+}
+
 TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --strict stops naming the frame") {
   test::ScratchDir dir("pipeline-damaged");
   const fs::path video = dir / "video";

@@ -258,8 +258,10 @@ CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   ctx->thread_type = FF_THREAD_SLICE;
   // The quantiser of each macroblock beside its vectors: how coarsely the encoder coded the block, a
   // confidence signal for the vector (frontend prior_max_qp).
-  if (options.export_motion || motion_only)
-    ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS | AV_CODEC_EXPORT_DATA_VIDEO_ENC_PARAMS;
+  if (options.export_motion || motion_only) {
+    ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
+    if (options.export_qp) ctx->export_side_data |= AV_CODEC_EXPORT_DATA_VIDEO_ENC_PARAMS;
+  }
   // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
   if (motion_only || options.skip_loop_filter) ctx->skip_loop_filter = AVDISCARD_ALL;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;

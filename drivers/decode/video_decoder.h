@@ -31,6 +31,9 @@ struct DecodedFrame {
 struct DecoderOptions {
   DecoderKind kind = DecoderKind::kAuto;
   bool export_motion = true;
+  // With the vectors, also each macroblock's quantiser (MotionField::qpAt; the frontend's
+  // prior_max_qp). Off unless asked: FFmpeg then allocates its side data for every picture.
+  bool export_qp = false;
   // false: parse only for the motion vectors (software, loop filter skipped, luma left empty).
   bool decode_pixels = true;
   // Software decoding: skip H.264's deblocking (in-loop) filter for the pixels too. About a fifth of

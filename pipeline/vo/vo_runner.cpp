@@ -243,6 +243,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     decode_options.decoder.kind = options.decoder;
     decode_options.decoder.strict = options.strict;
     decode_options.decoder.skip_loop_filter = options.skip_deblock;
+    decode_options.decoder.export_qp = config.frontend.prior_max_qp > 0;  // only the QP check reads them
     decode_options.decoder.log_choice = false;
     for (std::size_t c = 0; c < 2; ++c) {
       decode_options.names[c] = info.stream_names[c].empty() ? fmt::format("cam{}", c) : info.stream_names[c];
