@@ -177,7 +177,10 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   // And the run itself: no --config writes what --config euroc writes, byte for byte.
   test::ScratchDir dir("pipeline-default-config");
   pipeline::VoRunOptions options = quietRun(rendered().video, dir / "default.txt", 1);
-  REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
+  const pipeline::VoRunResult by_default = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(by_default.pipeline.error);
+  // The shipped prior_agree_radius_px is in force, and its skipped prior tracks reach the totals.
+  CHECK(by_default.frontend.prior_confirmed > 0);
   options.trajectory_file = dir / "euroc.txt";
   options.config = fs::path("euroc");
   REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);

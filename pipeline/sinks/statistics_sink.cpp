@@ -69,6 +69,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
     f.tracked_prior += t.tracked_prior;
     f.with_vector += t.with_vector;
     f.distrusted += t.distrusted;
+    f.prior_confirmed += t.prior_confirmed;
   }
   f.detected += s.detected;
   f.detected_right_only += s.detected_right_only;

@@ -412,6 +412,10 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
              t.distrusted > 0 ? fmt::format(" ({:.1f} % of them distrusted)", pct(t.distrusted, t.with_vector))
                               : std::string(),
              t.tracked_plain, t.tracked_prior);
+  if (t.prior_confirmed > 0) {
+    fmt::print(out, "prior tracks not run, the vector landing within prior_agree_radius_px of the plain result: {}\n",
+               t.prior_confirmed);
+  }
   fmt::print(out,
              "rescued by the prior: {} ({:.2f} per frame); consensus rejections: {} ({:.2f} per frame); bridged "
              "I-frames: {}\n",
@@ -492,6 +496,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"tracked_from_prior", t.tracked_prior},
                    {"with_vector", t.with_vector},
                    {"distrusted_vectors", t.distrusted},
+                   {"prior_tracks_confirmed", t.prior_confirmed},
                    {"detected", t.detected},
                    {"detected_right_only", t.detected_right_only},
                    {"stereo_matched", t.stereo_matched},
