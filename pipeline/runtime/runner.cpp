@@ -90,6 +90,9 @@ struct Pipeline::Impl final : StageContext {
   std::vector<StageReport> reports;
   std::vector<std::string> names;
   std::atomic<int> failed_stage{-1};  // the furthest stage that failed; -1: none
+  // Drop and damage records left to take, shared by the groups: usually one group does all the
+  // dropping (the one with the frontend), so an even split per group would cut its list short.
+  std::atomic<std::int64_t> release_records_left{static_cast<std::int64_t>(kMaxReleasedRecords)};
   std::atomic<bool> source_finished{false};
   std::optional<StageError> error;  // guarded by error_claimed
   std::atomic<bool> error_claimed{false};
@@ -144,7 +147,7 @@ struct Pipeline::Impl final : StageContext {
     if (reason == ReleaseReason::kDamaged) ++r.damaged;
     if (reason == ReleaseReason::kDropped || reason == ReleaseReason::kDamaged) {
       auto& list = groups[static_cast<std::size_t>(group_of[static_cast<std::size_t>(stage)])].released;
-      if (list.size() < list.capacity()) {
+      if (list.size() < list.capacity() && release_records_left.fetch_sub(1, std::memory_order_relaxed) > 0) {
         list.push_back({slot.frameIndex(), platform::monotonicNs(), stage, reason});
       }
     }
@@ -397,7 +400,7 @@ Pipeline::Pipeline(SourceStage& source, std::vector<Stage*> stages, PipelineOpti
     // Room for every slot plus the end marker, so enqueueing never waits.
     if (g > 0) group.input = std::make_unique<SlotQueue>(static_cast<std::size_t>(pool_size) + 1);
     group.free_ring = std::make_unique<SlotQueue>(static_cast<std::size_t>(pool_size) + 1);
-    group.released.reserve(kMaxReleasedRecords / d.groups.size() + 1);
+    group.released.reserve(kMaxReleasedRecords);
   }
   for (auto& slot : d.pool) d.groups[0].free_ring->wait_enqueue(slot.get());
   d.free_count.signal(pool_size);
