@@ -32,7 +32,7 @@ const std::vector<BenchMode>& benchModes() {
       {"frontend", "Frontend CPU time per stereo frame for each prior mode", voca::cli::configureFrontendBench},
       {"pipeline", "Whole-pipeline frames/s offline (1 thread vs staged), latency at real rate, peak memory",
        voca::cli::configurePipelineBench},
-      {"backend", "Estimator cost per frame on synthetic observations (7 keyframes, ~200 points)",
+      {"backend", "Estimator cost per frame on the tracks of a moving sequence (or --synthetic observations)",
        voca::cli::configureBackendBench},
       {"suite", "Evaluation suite: sequences x bitrates x modes -> the paper's tables (resumable, --jobs, cluster)",
        voca::cli::configureSuiteBench},
