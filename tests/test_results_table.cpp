@@ -177,3 +177,38 @@ TEST_CASE("buildResultsTable: a system left out of the AVG rule, an all-failed s
 
   CHECK_THROWS_AS(voca::buildResultsTable(systems({"A"}), {"a", "b"}, {{ok(0.1, 0.01)}}), std::invalid_argument);
 }
+
+TEST_CASE("compareWithBaseline: mean and worst relative change over the sequences both completed") {
+  // Baseline B and system M on four sequences: M is 20 % better on a, 10 % worse on b, 4 % worse on c,
+  // and diverges on d (ATE beyond 10 m), where B has a value.
+  const voca::ResultsTable t = voca::buildResultsTable(systems({"B", "M"}), {"a", "b", "c", "d"},
+                                                       {{ok(1.0, 0.010), ok(0.8, 0.008)},
+                                                        {ok(2.0, 0.020), ok(2.2, 0.022)},
+                                                        {ok(1.0, 0.050), ok(1.04, 0.052)},
+                                                        {ok(1.0, 0.010), ok(11.0, 0.0103)}});
+  const voca::BaselineComparison ate = voca::compareWithBaseline(t, 1, 0, TableMetric::kAte, 0.05);
+  CHECK(ate.compared == 3);
+  CHECK(ate.failed_only_system == 1);
+  CHECK(ate.failed_only_baseline == 0);
+  CHECK(ate.mean_change == doctest::Approx((-0.2 + 0.1 + 0.04) / 3.0));
+  CHECK(ate.worst_change == doctest::Approx(0.1));
+  CHECK(t.sequences[ate.worst_sequence] == "b");
+  CHECK(ate.worse_than_tolerance == 1);  // b; c's 4 % is within 5 %
+  // RTE: d has a value for both (1.03 cm is below the 10 cm divergence threshold): 3 % worse.
+  const voca::BaselineComparison rte = voca::compareWithBaseline(t, 1, 0, TableMetric::kRte, 0.05);
+  CHECK(rte.compared == 4);
+  CHECK(rte.mean_change == doctest::Approx((-0.2 + 0.1 + 0.04 + 0.03) / 4.0));
+  CHECK(rte.worse_than_tolerance == 1);
+  CHECK(t.sequences[rte.worst_sequence] == "b");
+  // The other way round the failure is the baseline's, and the changes are those of B against M.
+  const voca::BaselineComparison back = voca::compareWithBaseline(t, 0, 1, TableMetric::kAte, 0.05);
+  CHECK(back.failed_only_baseline == 1);
+  CHECK(back.failed_only_system == 0);
+  CHECK(back.worst_change == doctest::Approx(0.25));  // a: 1.0 / 0.8
+  // Against itself: every change zero.
+  const voca::BaselineComparison self = voca::compareWithBaseline(t, 0, 0, TableMetric::kRte, 0.0);
+  CHECK(self.compared == 4);
+  CHECK(self.mean_change == 0.0);
+  CHECK(self.worse_than_tolerance == 0);
+  CHECK_THROWS_AS(voca::compareWithBaseline(t, 2, 0, TableMetric::kAte, 0.05), std::invalid_argument);
+}

@@ -214,6 +214,50 @@ std::string csvField(const json& value) {
   return value.dump();
 }
 
+// Issue 18's bar: a prior mode should never be more than this much worse than `none`.
+constexpr double kAgainstNoneTolerance = 0.05;
+
+// Rows of the summary's "against none" table and CSV for one bitrate: every VOCA-RT system of a prior
+// mode against the `none` system of the same config (bridging aside). External systems are left out.
+void appendAgainstNone(const ResultsTable& table, const std::vector<TableSystem>& systems, const SuitePlan& plan,
+                       const std::string& bitrate, std::string& md, std::string& csv) {
+  const auto planned = [&](const std::string& system) -> const PlannedRun* {
+    const auto it = std::find_if(plan.runs.begin(), plan.runs.end(),
+                                 [&](const PlannedRun& r) { return r.system == system && r.bitrate == bitrate; });
+    return it == plan.runs.end() ? nullptr : &*it;
+  };
+  for (std::size_t s = 0; s < systems.size(); ++s) {
+    const PlannedRun* run = planned(systems[s].name);
+    if (run == nullptr || run->mode == "none") continue;
+    std::size_t baseline = systems.size();
+    for (std::size_t b = 0; b < systems.size(); ++b) {
+      const PlannedRun* candidate = planned(systems[b].name);
+      if (candidate != nullptr && candidate->mode == "none" && candidate->config == run->config) baseline = b;
+    }
+    if (baseline == systems.size()) continue;
+    const auto percent = [](double change) { return fmt::format("{:+.1f} %", 100.0 * change); };
+    std::string row = fmt::format("| {} | {} |", bitrate, systems[s].name);
+    std::size_t failed = 0;
+    for (const TableMetric metric : {TableMetric::kRte, TableMetric::kAte}) {
+      const BaselineComparison c = compareWithBaseline(table, s, baseline, metric, kAgainstNoneTolerance);
+      failed = std::max(failed, c.failed_only_system);
+      if (metric == TableMetric::kRte) row += fmt::format(" {} |", c.compared);
+      if (c.compared == 0) {
+        row += " – | – | – |";
+      } else {
+        row += fmt::format(" {} | {} ({}) | {} |", percent(c.mean_change), percent(c.worst_change),
+                           table.sequences[c.worst_sequence], c.worse_than_tolerance);
+      }
+      csv += fmt::format("{},{},{},{},{},{:.6g},{:.6g},{},{},{},{}\n", csvField(bitrate), csvField(systems[s].name),
+                         csvField(systems[baseline].name), metric == TableMetric::kRte ? "rte" : "ate", c.compared,
+                         c.mean_change, c.worst_change,
+                         c.compared == 0 ? std::string() : csvField(table.sequences[c.worst_sequence]),
+                         c.worse_than_tolerance, c.failed_only_system, c.failed_only_baseline);
+    }
+    md += row + fmt::format(" {} |\n", failed);
+  }
+}
+
 }  // namespace
 
 double resetFreeFraction(const json& statistics) {
@@ -434,6 +478,7 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
   const auto number = [](const TableCell& cell) {
     return cell.kind == CellKind::kValue ? fmt::format("{:.9g}", cell.value) : std::string();
   };
+  std::string against_none_md, against_none_csv;
   std::map<std::string, std::map<std::string, std::string>> pivot;  // system -> bitrate -> "MED ATE / SR"
   for (const std::string& bitrate : suite.bitrates) {
     std::vector<TableSystem> systems;
@@ -460,6 +505,7 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
     writeFile(base.string() + ".csv", tableCsv(table));
     writeFile(base.string() + ".tex", tableLatex(table, fmt::format("{}, {}.", suite.name, title), suite.rules));
     for (const char* ext : {".md", ".csv", ".tex"}) written.push_back(base.string() + ext);
+    appendAgainstNone(table, systems, plan, bitrate, against_none_md, against_none_csv);
     for (std::size_t s = 0; s < systems.size(); ++s) {
       summary_csv += fmt::format("\"{}\",{},{},{},{},{},{},{:.6g},{:.6g}\n", systems[s].name, bitrate, sequences.size(),
                                  number(table.median[0][s]), number(table.median[1][s]), number(table.average[0][s]),
@@ -481,6 +527,17 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
       summary_md += fmt::format(" {} |", it == pivot[system].end() ? std::string() : it->second);
     }
     summary_md += "\n";
+  }
+  if (!against_none_md.empty()) {
+    summary_md += fmt::format(
+        "\nPrior modes against `none` with the same config: per-sequence change of the error over the sequences "
+        "both completed (negative = lower than `none`'s), its mean and worst, the sequences more than {:.0f} % "
+        "worse, and those only the mode failed (divergence, crash or reset)\n\n"
+        "| bitrate | system | sequences | RTE mean | RTE worst | RTE > {:.0f} % | ATE mean | ATE worst | ATE > {:.0f} "
+        "% "
+        "| failed |\n|---|---|---:|---:|---|---:|---:|---|---:|---:|\n",
+        100.0 * kAgainstNoneTolerance, 100.0 * kAgainstNoneTolerance, 100.0 * kAgainstNoneTolerance);
+    summary_md += against_none_md;
   }
   // Encoded size per sequence and bitrate: what the bitrate buys.
   summary_md += "\nEncoded video (both cameras) per sequence, bytes\n\n| sequence |";
@@ -508,6 +565,13 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
   writeFile(out / "summary.csv", summary_csv);
   written.push_back(out / "summary.md");
   written.push_back(out / "summary.csv");
+  if (!against_none_csv.empty()) {
+    writeFile(out / "against_none.csv",
+              "bitrate,system,baseline,metric,compared,mean_change,worst_change,worst_sequence,worse_than_5pct,"
+              "failed_only_system,failed_only_baseline\n" +
+                  against_none_csv);
+    written.push_back(out / "against_none.csv");
+  }
 
   const std::vector<std::string> columns = {"id",
                                             "system",

@@ -7,10 +7,10 @@
 #include <memory>
 #include <string>
 
-#include "platform/process/child_process.h"
-#include "platform/realtime/stop_signal.h"
 #include "pipeline/harness/run_suite.h"
 #include "pipeline/harness/suite.h"
+#include "platform/process/child_process.h"
+#include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
 
 namespace voca::cli {
@@ -86,8 +86,9 @@ Runner configureSuiteBench(CLI::App& app) {
       "each run is a child `voca run` writing <out>/runs/<id>/{trajectory.txt,stats.json,log.txt,\n"
       "result.json}. A run that crashes or fails is recorded as x and the suite goes on; a second call\n"
       "skips what is done. Tables follow the paper's rules: <out>/tables/<bitrate>.{md,csv,tex},\n"
-      "<out>/summary.md. Cluster: --emit-jobs synth, then encode, then run, each | parallel (or a Slurm\n"
-      "array), then `voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
+      "<out>/summary.md, with each prior mode against `none` (also <out>/against_none.csv). Cluster:\n"
+      "--emit-jobs synth, then encode, then run, each | parallel (or a Slurm array), then\n"
+      "`voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
   return [o] { return runSuiteCommand(*o); };
 }
 

@@ -156,4 +156,31 @@ ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std
   return table;
 }
 
+BaselineComparison compareWithBaseline(const ResultsTable& table, std::size_t system, std::size_t baseline,
+                                       TableMetric metric, double tolerance) {
+  if (system >= table.systems.size() || baseline >= table.systems.size()) {
+    throw std::invalid_argument("compareWithBaseline: no such system in the table");
+  }
+  const auto& cells = table.cells[static_cast<std::size_t>(metric)];
+  BaselineComparison result;
+  double sum = 0.0;
+  for (std::size_t q = 0; q < cells.size(); ++q) {
+    const TableCell& mine = cells[q][system];
+    const TableCell& base = cells[q][baseline];
+    if (base.kind == CellKind::kValue && isFailure(mine.kind)) ++result.failed_only_system;
+    if (mine.kind == CellKind::kValue && isFailure(base.kind)) ++result.failed_only_baseline;
+    if (mine.kind != CellKind::kValue || base.kind != CellKind::kValue || !(base.value > 0.0)) continue;
+    const double change = mine.value / base.value - 1.0;
+    if (result.compared == 0 || change > result.worst_change) {
+      result.worst_change = change;
+      result.worst_sequence = q;
+    }
+    if (change > tolerance) ++result.worse_than_tolerance;
+    sum += change;
+    ++result.compared;
+  }
+  if (result.compared > 0) result.mean_change = sum / static_cast<double>(result.compared);
+  return result;
+}
+
 }  // namespace voca

@@ -83,6 +83,23 @@ ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std
                                const std::vector<std::vector<std::optional<RunMetrics>>>& runs,
                                const TableRules& rules = {});
 
+// One system of a table against another of the same table, one metric (e.g. a prior mode against
+// `none`): the per-sequence relative change system / baseline - 1 over the sequences where both have a
+// value (negative = lower error than the baseline).
+struct BaselineComparison {
+  std::size_t compared = 0;            // sequences where both have a value
+  std::size_t failed_only_system = 0;  // the system failed (infinity, x, R) where the baseline has a value
+  std::size_t failed_only_baseline = 0;
+  double mean_change = 0.0;              // mean of the per-sequence changes (0 when none compared)
+  double worst_change = 0.0;             // the largest change
+  std::size_t worst_sequence = 0;        // its index in table.sequences
+  std::size_t worse_than_tolerance = 0;  // sequences whose change exceeds the tolerance
+};
+
+// Throws std::invalid_argument when an index is out of range.
+BaselineComparison compareWithBaseline(const ResultsTable& table, std::size_t system, std::size_t baseline,
+                                       TableMetric metric, double tolerance);
+
 // Marks the lowest value of a row rank 1 (all ties) and the next distinct value rank 2; failures and
 // missing cells are not ranked. Nothing is ranked when fewer than two cells hold values.
 void rankRow(std::vector<TableCell*> row);
