@@ -426,10 +426,11 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     int correct = 0;       // kept points within 0.1 px of the true position
     int prior_closer = 0;  // kept points with a vector whose prior guess lies within 1.5 px of the result
   };
-  const auto run = [&](PriorMode mode, bool bridge, PictureType third_type) {
+  const auto run = [&](PriorMode mode, bool bridge, PictureType third_type, bool rescue = true) {
     FrontendConfig config;
     config.prior_mode = mode;
     config.bridge_iframes = bridge;
+    config.prior_rescue = rescue;
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame frame;
     FrontendStats stats;
@@ -474,6 +475,11 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     // of_then_mv keeps whatever the plain track converged to; the others keep few false tracks.
     if (mode != PriorMode::kOfThenMv) CHECK(with_prior[1].stats.kept - with_prior[1].correct <= 2);
   }
+  // prior_rescue false: the prior may only veto, so the points the plain track loses stay lost.
+  const auto vetoing = run(PriorMode::kMvParallelOf, true, PictureType::kP, false);
+  CHECK(vetoing[1].stats.rescued == 0);
+  CHECK(vetoing[1].stats.kept <= none[1].stats.kept);
+  CHECK(vetoing[1].correct <= vetoing[1].visible / 4);
   // Frame 2 is an I-frame without vectors: bridged from frame 1's field the prior still works.
   const auto bridged = run(PriorMode::kMvParallelOf, true, PictureType::kI);
   CHECK(bridged[2].stats.with_vector == bridged[2].stats.previous);

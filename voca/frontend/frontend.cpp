@@ -305,6 +305,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       if (same_start || confirmed) {
         prior_px = plain_px;
         prior_ok = plain_ok;
+      } else if (!plain_ok && !config_.prior_rescue) {
+        prior_ok = false;  // it could only rescue the point, which this config forbids
       } else {
         const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
