@@ -426,11 +426,11 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     int correct = 0;       // kept points within 0.1 px of the true position
     int prior_closer = 0;  // kept points with a vector whose prior guess lies within 1.5 px of the result
   };
-  const auto run = [&](PriorMode mode, bool bridge, PictureType third_type, bool rescue = true) {
+  const auto run = [&](PriorMode mode, bool bridge, PictureType third_type, double rescue_min_px = 0.0) {
     FrontendConfig config;
     config.prior_mode = mode;
     config.bridge_iframes = bridge;
-    config.prior_rescue = rescue;
+    config.prior_rescue_min_px = rescue_min_px;
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame frame;
     FrontendStats stats;
@@ -475,8 +475,12 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     // of_then_mv keeps whatever the plain track converged to; the others keep few false tracks.
     if (mode != PriorMode::kOfThenMv) CHECK(with_prior[1].stats.kept - with_prior[1].correct <= 2);
   }
-  // prior_rescue false: the prior may only veto, so the points the plain track loses stay lost.
-  const auto vetoing = run(PriorMode::kMvParallelOf, true, PictureType::kP, false);
+  // prior_rescue_min_px: the 41.7 px vectors may rescue under a 30 px minimum; under 50 px the prior
+  // may only veto, so the points the plain track loses stay lost.
+  const auto long_enough = run(PriorMode::kMvParallelOf, true, PictureType::kP, 30.0);
+  CHECK(long_enough[1].correct >= long_enough[1].visible * 8 / 10);
+  CHECK(long_enough[1].stats.rescued >= long_enough[1].correct * 3 / 4);
+  const auto vetoing = run(PriorMode::kMvParallelOf, true, PictureType::kP, 50.0);
   CHECK(vetoing[1].stats.rescued == 0);
   CHECK(vetoing[1].stats.kept <= none[1].stats.kept);
   CHECK(vetoing[1].correct <= vetoing[1].visible / 4);

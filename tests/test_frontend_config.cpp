@@ -134,6 +134,8 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.prior_pyramid_levels: expected an integer in [-1, 2], got 3"));
   message = errorFor(R"({"frontend": {"prior_agree_radius_px": -0.5}})");
   CHECK(contains(message, "frontend.prior_agree_radius_px: expected a number in [0,"));
+  message = errorFor(R"({"frontend": {"prior_rescue_min_px": -1}})");
+  CHECK(contains(message, "frontend.prior_rescue_min_px: expected a number in [0,"));
 
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));

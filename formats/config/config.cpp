@@ -60,7 +60,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_max_qp", &FrontendConfig::prior_max_qp},
     {"prior_pyramid_levels", &FrontendConfig::prior_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
-    {"prior_rescue", &FrontendConfig::prior_rescue},
+    {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
     {"presmooth", &FrontendConfig::presmooth},
 };

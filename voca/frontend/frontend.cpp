@@ -234,6 +234,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   const PriorMode mode = config_.prior_mode;
   const float tolerance = static_cast<float>(config_.consensus_tolerance_px2);
   const float agree_radius2 = static_cast<float>(config_.prior_agree_radius_px * config_.prior_agree_radius_px);
+  const float rescue_min2 = static_cast<float>(config_.prior_rescue_min_px * config_.prior_rescue_min_px);
   cam.next_ids.clear();
   cam.next_points.clear();
   cam.next_slots.clear();
@@ -305,8 +306,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       if (same_start || confirmed) {
         prior_px = plain_px;
         prior_ok = plain_ok;
-      } else if (!plain_ok && !config_.prior_rescue) {
-        prior_ok = false;  // it could only rescue the point, which this config forbids
+      } else if (!plain_ok && mv.squaredNorm() < rescue_min2) {
+        prior_ok = false;  // it could only rescue the point, and the vector is too short to (prior_rescue_min_px)
       } else {
         const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;

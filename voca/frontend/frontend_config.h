@@ -88,11 +88,14 @@ struct FrontendConfig {
   // Started that close to a minimum the prior track converges to the same one, so running it only
   // confirms; 0 = always track it (configs/README.md has the measurements).
   double prior_agree_radius_px = 0.0;
-  // mv_parallel_of: keep a point the plain track lost when the prior track alone passes its round
-  // trip (the paper's rule, "tracked once is a success"). That round trip starts from the negated
-  // vector, so a prior track that barely moved returns to its start whatever it matched: the check
-  // the paper itself calls unreliable for vector-initialised tracks. false = the prior only vetoes.
-  bool prior_rescue = true;
+  // mv_parallel_of: a point the plain track lost is kept from the prior track alone (the paper's
+  // rule, "tracked once is a success") only when its motion vector is at least this long (level-0
+  // pixels; 0 = always, the paper). That prior track's round trip starts from the negated vector, so
+  // a track that barely moved returns to its start whatever it matched: the check the paper itself
+  // calls unreliable for vector-initialised tracks. A short vector started the plain track within
+  // its reach, so there the plain failure says the point itself is bad (blur, occlusion); a long one
+  // is motion the pyramid cannot bridge, what the prior is for. A huge value: the prior only vetoes.
+  double prior_rescue_min_px = 0.0;
   // Also detect in the right image where the left camera does not see (cells whose reprojection
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).
