@@ -60,6 +60,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_max_qp", &FrontendConfig::prior_max_qp},
     {"prior_pyramid_levels", &FrontendConfig::prior_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
+    {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
     {"presmooth", &FrontendConfig::presmooth},
 };
