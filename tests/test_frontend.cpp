@@ -229,6 +229,46 @@ TEST_CASE("patch: coarse-to-fine alignment recovers a known shift, rotation and 
   CHECK(alignPatch(pb.level(0), tmpl, pattern52(), params, outside) == AlignStatus::kTooFewPoints);
 }
 
+TEST_CASE("patch: skip_coarse_outside lets the finer levels track a patch the coarse levels lose at the border") {
+  const WaveTexture texture(11, 48, 6.0, 60.0, 40.0);
+  const int w = 240, h = 200;
+  const Eigen::Vector2d t(-9.3, -8.6);  // towards the top-left corner
+  const GrayImage a = renderArbitrary(w, h, [&](double x, double y) { return texture.at(x, y); });
+  const GrayImage b = renderArbitrary(w, h, [&](double x, double y) { return texture.at(x - t.x(), y - t.y()); });
+  ImagePyramid pa(w, h, 4), pb(w, h, 4);
+  pa.build(a.view());
+  pb.build(b.view());
+  AlignParams plain, skip;
+  skip.skip_coarse_outside = true;
+  // Near the corner: level 3's patch (15 px at 8x) at the moved position has fewer than half of its
+  // points inside the image, level 0's all of them.
+  int rescued = 0;
+  for (const Eigen::Vector2f& p : {Eigen::Vector2f(36.f, 36.f), Eigen::Vector2f(38.5f, 35.2f), Eigen::Vector2f(34.f, 39.f)}) {
+    INFO("p " << p.transpose());
+    SE2f T_plain(0.f, p), T_skip(0.f, p);
+    const AlignStatus status = trackPatch(pa, pb, p, pattern52(), plain, 4, T_plain);
+    CHECK((status == AlignStatus::kTooFewPoints || status == AlignStatus::kOutside));
+    REQUIRE(trackPatch(pa, pb, p, pattern52(), skip, 4, T_skip) == AlignStatus::kConverged);
+    CHECK((T_skip.translation().cast<double>() - (p.cast<double>() + t)).norm() < 0.05);
+    ++rescued;
+  }
+  CHECK(rescued == 3);
+  // Inside the image no level is skipped: the same result bit for bit.
+  for (const Eigen::Vector2f& p : {Eigen::Vector2f(120.f, 100.f), Eigen::Vector2f(90.3f, 140.6f)}) {
+    SE2f T_plain(0.f, p), T_skip(0.f, p);
+    REQUIRE(trackPatch(pa, pb, p, pattern52(), plain, 4, T_plain) == AlignStatus::kConverged);
+    REQUIRE(trackPatch(pa, pb, p, pattern52(), skip, 4, T_skip) == AlignStatus::kConverged);
+    CHECK(T_plain.translation() == T_skip.translation());
+    CHECK(T_plain.angle() == T_skip.angle());
+    CHECK((T_skip.translation().cast<double>() - (p.cast<double>() + t)).norm() < 0.05);
+  }
+  // Level 0 is never skipped: a patch pushed mostly outside there still fails.
+  for (const int levels : {1, 4}) {
+    SE2f T_out(0.f, Eigen::Vector2f(-5.f, 100.f));
+    CHECK(trackPatch(pa, pb, Eigen::Vector2f(100.f, 100.f), pattern52(), skip, levels, T_out) != AlignStatus::kConverged);
+  }
+}
+
 TEST_CASE("detector: corners of squares, one per empty cell, border, mask and threshold halving") {
   const int w = 160, h = 120;
   // Dark squares on bright background: corners at the square corners. One low-contrast square

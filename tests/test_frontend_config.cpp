@@ -68,6 +68,10 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
             .frontend.prior_mode == PriorMode::kNone);
   CHECK(empty.frontend.prior_max_qp == 0);  // the QP check is off unless asked for
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_max_qp": 51}})"), "x").frontend.prior_max_qp == 51);
+  CHECK_FALSE(empty.frontend.skip_coarse_outside);  // Basalt's alignment unless asked for
+  CHECK_FALSE(tumvi.frontend.skip_coarse_outside);
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"skip_coarse_outside": true}})"), "x")
+            .frontend.skip_coarse_outside);
 }
 
 TEST_CASE("config: unknown keys, wrong types and out-of-range values name the key and the allowed values") {

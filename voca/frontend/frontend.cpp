@@ -64,6 +64,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   align_.max_iterations = config_.max_iterations;
   align_.min_step_px = static_cast<float>(config_.min_step_px);
   align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
+  align_.skip_coarse_outside = config_.skip_coarse_outside;
   max_points_ = capacities.max_points;
   if (max_points_ < 1) throw InputError("frontend capacity: max_points must be at least 1");
   width_ = rig.cameras[0].width;

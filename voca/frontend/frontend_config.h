@@ -45,6 +45,10 @@ struct FrontendConfig {
   // coarse_min_step_px. Larger values save iterations and move results slightly (configs/README.md).
   double min_step_px = 0.002;
   double coarse_min_step_px = 0.05;
+  // Near the image border a coarse level's patch (the pattern at 2^level times its size) runs out of
+  // image: skip that level's alignment, from where it started, instead of failing the track
+  // (AlignParams::skip_coarse_outside). Off = Basalt's behaviour.
+  bool skip_coarse_outside = false;
   int pattern = 52;                       // 24 or 52 sample points per patch
   double max_recovered_dist2_px2 = 0.25;  // forward-backward round trip tolerance
   double epipolar_error = 0.005;          // |f0^T E f1| on unit bearings

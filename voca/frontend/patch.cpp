@@ -232,10 +232,17 @@ AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& 
       return AlignStatus::kTemplateInvalid;
     }
     const float scale = static_cast<float>(1 << level);
+    const SE2f start = T;
     T.translation() /= scale;
     const AlignStatus status = alignPatch(to.level(level), tmpl, pattern, params, T, level > 0);
     T.translation() *= scale;
-    if (status != AlignStatus::kConverged) return status;
+    if (status == AlignStatus::kConverged) continue;
+    if (level > 0 && params.skip_coarse_outside &&
+        (status == AlignStatus::kTooFewPoints || status == AlignStatus::kOutside)) {
+      T = start;  // the finer levels start where this one did
+      continue;
+    }
+    return status;
   }
   return AlignStatus::kConverged;
 }

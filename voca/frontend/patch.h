@@ -103,6 +103,11 @@ struct AlignParams {
   // below coarse_min_step_px on coarser levels, whose result the finer levels refine anyway.
   float min_step_px = 2e-3f;
   float coarse_min_step_px = 0.05f;
+  // A coarse level (not level 0) whose alignment loses more than half of the pattern, or steps
+  // outside the image, is skipped from where it started instead of failing the track: near the image
+  // border the coarse levels' patches (the pattern times 2^level) run out of image long before level
+  // 0's does. Off = fail, as Basalt does.
+  bool skip_coarse_outside = false;
 };
 
 // Refines T (pattern offset -> target level pixels) on one level by inverse-compositional Gauss-Newton,
