@@ -533,9 +533,8 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
         "\nPrior modes against `none` with the same config: per-sequence change of the error over the sequences "
         "both completed (negative = lower than `none`'s), its mean and worst, the sequences more than {:.0f} % "
         "worse, and those only the mode failed (divergence, crash or reset)\n\n"
-        "| bitrate | system | sequences | RTE mean | RTE worst | RTE > {:.0f} % | ATE mean | ATE worst | ATE > {:.0f} "
-        "% "
-        "| failed |\n|---|---|---:|---:|---|---:|---:|---|---:|---:|\n",
+        "| bitrate | system | sequences | RTE mean | RTE worst | RTE > {:.0f} % | ATE mean | ATE worst "
+        "| ATE > {:.0f} % | failed |\n|---|---|---:|---:|---|---:|---:|---|---:|---:|\n",
         100.0 * kAgainstNoneTolerance, 100.0 * kAgainstNoneTolerance, 100.0 * kAgainstNoneTolerance);
     summary_md += against_none_md;
   }

@@ -308,7 +308,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
         prior_px = plain_px;
         prior_ok = plain_ok;
       } else if (!plain_ok && mv.squaredNorm() < rescue_min2) {
-        prior_ok = false;  // it could only rescue the point, and the vector is too short to (prior_rescue_min_px)
+        prior_ok = false;  // it could only rescue the point: too short a vector for that (prior_rescue_min_px)
       } else {
         const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
