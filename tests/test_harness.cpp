@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "tests/test_support.h"
 #include "pipeline/harness/suite.h"
 #include "pipeline/harness/table_format.h"
+#include "tests/test_support.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -142,6 +142,20 @@ TEST_CASE("planSuite: encodings made elsewhere are used as given; a video folder
   for (const auto& run :
        voca::harness::planSuite(voca::harness::parseSuite(kitti, dir.path(), "k.json"), "/out", "voca").runs) {
     CHECK(voca::harness::shellCommand(run.job.argv).find("--config kitti") != std::string::npos);
+  }
+  // Several suite configs and a sequence with its own: each run knows its column's config, which is
+  // what pairs a prior mode with its `none` in the summary, even where the run's own config is the same.
+  const json columns = {{"sequences", {{{"name", "s"}, {"synth", {"--seconds", "1"}}, {"config", "tumvi"}}}},
+                        {"bitrates", {"250k"}},
+                        {"modes", {"none", "mv_parallel_of"}},
+                        {"configs", {"euroc", "kitti"}}};
+  const voca::harness::SuitePlan by_column =
+      voca::harness::planSuite(voca::harness::parseSuite(columns, dir.path(), "c.json"), "/out", "voca");
+  REQUIRE(by_column.runs.size() == 4);
+  for (const auto& run : by_column.runs) {
+    CAPTURE(run.system);
+    CHECK(run.config == "tumvi");
+    CHECK(run.system.find("[" + run.suite_config + "]") != std::string::npos);
   }
   json missing = suite;
   missing["sequences"][1]["encoded"]["1M"] = "nowhere";

@@ -218,7 +218,7 @@ std::string csvField(const json& value) {
 constexpr double kAgainstNoneTolerance = 0.05;
 
 // Rows of the summary's "against none" table and CSV for one bitrate: every VOCA-RT system of a prior
-// mode against the `none` system of the same config (bridging aside). External systems are left out.
+// mode against the `none` system of the same column config (bridging aside). External systems are left out.
 void appendAgainstNone(const ResultsTable& table, const std::vector<TableSystem>& systems, const SuitePlan& plan,
                        const std::string& bitrate, std::string& md, std::string& csv) {
   const auto planned = [&](const std::string& system) -> const PlannedRun* {
@@ -232,7 +232,9 @@ void appendAgainstNone(const ResultsTable& table, const std::vector<TableSystem>
     std::size_t baseline = systems.size();
     for (std::size_t b = 0; b < systems.size(); ++b) {
       const PlannedRun* candidate = planned(systems[b].name);
-      if (candidate != nullptr && candidate->mode == "none" && candidate->config == run->config) baseline = b;
+      if (candidate != nullptr && candidate->mode == "none" && candidate->suite_config == run->suite_config) {
+        baseline = b;
+      }
     }
     if (baseline == systems.size()) continue;
     const auto percent = [](double change) { return fmt::format("{:+.1f} %", 100.0 * change); };

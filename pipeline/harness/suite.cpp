@@ -344,6 +344,7 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
             run.mode = mode;
             run.bridge = varies ? bridge : true;
             run.config = config;
+            run.suite_config = suite_config;
             run.system = systemName(mode, run.bridge, suite_config);
             run.preparation_id = preparation;
             run.input = input;

@@ -79,6 +79,7 @@ struct Job {
 struct PlannedRun {
   Job job;
   std::string sequence, bitrate, mode, config;
+  std::string suite_config;  // the suite's config of its column (config is the sequence's own when it has one)
   bool bridge = true;
   std::string system;          // its column in the tables: mode, "no bridge", config when several
   std::string preparation_id;  // the synth or encode job it needs ("" = none)
