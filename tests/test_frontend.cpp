@@ -242,17 +242,15 @@ TEST_CASE("patch: skip_coarse_outside lets the finer levels track a patch the co
   skip.skip_coarse_outside = true;
   // Near the corner: level 3's patch (15 px at 8x) at the moved position has fewer than half of its
   // points inside the image, level 0's all of them.
-  int rescued = 0;
-  for (const Eigen::Vector2f& p : {Eigen::Vector2f(36.f, 36.f), Eigen::Vector2f(38.5f, 35.2f), Eigen::Vector2f(34.f, 39.f)}) {
+  for (const Eigen::Vector2f& p :
+       {Eigen::Vector2f(36.f, 36.f), Eigen::Vector2f(38.5f, 35.2f), Eigen::Vector2f(34.f, 39.f)}) {
     INFO("p " << p.transpose());
     SE2f T_plain(0.f, p), T_skip(0.f, p);
     const AlignStatus status = trackPatch(pa, pb, p, pattern52(), plain, 4, T_plain);
     CHECK((status == AlignStatus::kTooFewPoints || status == AlignStatus::kOutside));
     REQUIRE(trackPatch(pa, pb, p, pattern52(), skip, 4, T_skip) == AlignStatus::kConverged);
     CHECK((T_skip.translation().cast<double>() - (p.cast<double>() + t)).norm() < 0.05);
-    ++rescued;
   }
-  CHECK(rescued == 3);
   // Inside the image no level is skipped: the same result bit for bit.
   for (const Eigen::Vector2f& p : {Eigen::Vector2f(120.f, 100.f), Eigen::Vector2f(90.3f, 140.6f)}) {
     SE2f T_plain(0.f, p), T_skip(0.f, p);
@@ -265,7 +263,8 @@ TEST_CASE("patch: skip_coarse_outside lets the finer levels track a patch the co
   // Level 0 is never skipped: a patch pushed mostly outside there still fails.
   for (const int levels : {1, 4}) {
     SE2f T_out(0.f, Eigen::Vector2f(-5.f, 100.f));
-    CHECK(trackPatch(pa, pb, Eigen::Vector2f(100.f, 100.f), pattern52(), skip, levels, T_out) != AlignStatus::kConverged);
+    CHECK(trackPatch(pa, pb, Eigen::Vector2f(100.f, 100.f), pattern52(), skip, levels, T_out) !=
+          AlignStatus::kConverged);
   }
 }
 
