@@ -154,6 +154,10 @@ TEST_CASE("config: unreadable and malformed files") {
   CHECK_THROWS_WITH_AS(loadConfig(dir / "missing.json"), doctest::Contains("cannot open"), InputError);
   { std::ofstream(dir / "broken.json") << "{\"frontend\": {\"pattern\": 52,"; }
   CHECK_THROWS_WITH_AS(loadConfig(dir / "broken.json"), doctest::Contains("broken.json: not valid JSON"), InputError);
+  // nlohmann reports a number beyond a double as out_of_range, not parse_error (found by fuzz_config).
+  { std::ofstream(dir / "huge_number.json") << R"({"frontend": {"max_iterations": 5e44014}})"; }
+  CHECK_THROWS_WITH_AS(loadConfig(dir / "huge_number.json"), doctest::Contains("huge_number.json: not valid JSON"),
+                       InputError);
   { std::ofstream(dir / "empty.json") << ""; }
   CHECK_THROWS_AS(loadConfig(dir / "empty.json"), InputError);
   { std::ofstream(dir / "bad_value.json") << R"({"frontend": {"grid_size_px": 2}})"; }

@@ -74,6 +74,12 @@ TEST_CASE("suite files: unknown keys, wrong values and missing folders are error
   CHECK(errorOf(suite).find("Basalt: no sequence named zz") != std::string::npos);
 
   CHECK(inputErrorOf([] { voca::harness::loadSuite("/no/such/suite.json"); }).find("cannot open") != std::string::npos);
+  {
+    voca::test::ScratchDir dir("harness-suite-json");
+    std::ofstream(dir / "huge.json") << R"({"sequences": [{"name": "a", "seconds": 1e400}]})";
+    const std::string path = (dir / "huge.json").string();
+    CHECK(inputErrorOf([&] { voca::harness::loadSuite(path); }).find("huge.json: not valid JSON") != std::string::npos);
+  }
   CHECK(voca::harness::normaliseBitrate("1M", "x") == "1000k");
   CHECK(voca::harness::normaliseBitrate("raw", "x") == "raw");
 }

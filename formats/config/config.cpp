@@ -2,9 +2,7 @@
 
 #include <fmt/core.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string_view>
 
 #include "formats/config/builtin_configs.h"
@@ -112,16 +110,7 @@ VocaConfig loadConfig(const std::filesystem::path& file_or_name) {
   if (!std::filesystem::exists(file_or_name) && !file_or_name.has_extension() && !file_or_name.has_parent_path()) {
     return builtinConfig(text_name);
   }
-  std::ifstream in(file_or_name);
-  if (!in) throw InputError(fmt::format("{}: cannot open the config file", file_or_name.string()));
-  std::stringstream text;
-  text << in.rdbuf();
-  json root;
-  try {
-    root = json::parse(text.str());
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", file_or_name.string(), e.what()));
-  }
+  const json root = readJsonFile(file_or_name, "config file");
   return parseConfig(root, file_or_name.string());
 }
 

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -22,6 +23,19 @@
 #include "voca/core/error.h"
 
 namespace voca {
+
+// Reads a whole JSON file. Every way the text can fail (syntax, a number too large for a double,
+// invalid UTF-8) is an InputError "<file>: not valid JSON: ..."; a missing file is "<file>: cannot
+// open the <what>".
+inline nlohmann::json readJsonFile(const std::filesystem::path& file, const std::string& what) {
+  std::ifstream in(file);
+  if (!in) throw InputError(fmt::format("{}: cannot open the {}", file.string(), what));
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not valid JSON: {}", file.string(), e.what()));
+  }
+}
 
 // Integers a config may hold when its field gives no range of its own (keeps the cast to int safe).
 inline constexpr std::int64_t kConfigIntLimit = 1'000'000'000;

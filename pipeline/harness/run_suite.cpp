@@ -31,8 +31,8 @@ std::optional<json> readJson(const fs::path& file) {
   if (!in) return std::nullopt;
   try {
     return json::parse(in);
-  } catch (const json::parse_error&) {
-    return std::nullopt;  // a file cut short by a crash: treated as absent
+  } catch (const json::exception&) {
+    return std::nullopt;  // a file cut short or garbled by a crash: treated as absent
   }
 }
 

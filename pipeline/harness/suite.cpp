@@ -1,7 +1,6 @@
 #include "pipeline/harness/suite.h"
 
 #include <algorithm>
-#include <fstream>
 #include <set>
 
 #include <fmt/core.h>
@@ -219,14 +218,7 @@ Suite parseSuite(const json& root, const fs::path& base, const std::string& cont
 }
 
 Suite loadSuite(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(fmt::format("{}: cannot open the suite file", file.string()));
-  json root;
-  try {
-    root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw InputError(fmt::format("{}: not valid JSON: {}", file.string(), e.what()));
-  }
+  const json root = readJsonFile(file, "suite file");
   return parseSuite(root, fs::absolute(file).parent_path(), file.string());
 }
 
