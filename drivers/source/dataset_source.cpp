@@ -12,8 +12,17 @@ namespace voca {
 
 namespace {
 
-std::size_t frameLimit(std::size_t available, int max_frames) {
-  return max_frames > 0 ? std::min<std::size_t>(available, static_cast<std::size_t>(max_frames)) : available;
+// One past the last frame to deliver; InputError when the first frame is past the dataset's end.
+std::size_t frameEnd(const Dataset& dataset, const ReplayOptions& options) {
+  const std::size_t available = dataset.frames.size();
+  if (options.first_frame < 0) throw InputError(fmt::format("first frame {} is negative", options.first_frame));
+  const auto first = static_cast<std::size_t>(options.first_frame);
+  if (available > 0 && first >= available) {
+    throw InputError(fmt::format("{}: starting at frame {} leaves nothing to track: the dataset has {} frames",
+                                 dataset.root.string(), first, available));
+  }
+  return options.max_frames > 0 ? std::min<std::size_t>(available, first + static_cast<std::size_t>(options.max_frames))
+                                : available;
 }
 
 // Frames per second from the median interval of the dataset's timestamps; 0 for fewer than two.
@@ -30,17 +39,20 @@ double medianRate(const Dataset& dataset) {
   return median > 0 ? 1e9 / static_cast<double>(median) : 0.0;
 }
 
+std::string startNote(std::size_t first) { return first > 0 ? fmt::format(" from frame {}", first) : std::string(); }
+
 }  // namespace
 
 ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& options) : dataset_(std::move(dataset)) {
   if (dataset_.layout == DatasetLayout::kVocaVideo) {
     throw InputError(dataset_.root.string() + ": a video folder, not an image dataset");
   }
-  count_ = frameLimit(dataset_.frames.size(), options.max_frames);
+  count_ = frameEnd(dataset_, options);
   if (count_ == 0) throw InputError(dataset_.root.string() + ": no stereo frames");
+  index_ = static_cast<std::size_t>(options.first_frame);
   GrayImage left, right;
-  readPngGray(dataset_.frames[0].left, left);
-  readPngGray(dataset_.frames[0].right, right);
+  readPngGray(dataset_.frames[index_].left, left);
+  readPngGray(dataset_.frames[index_].right, right);
   if (left.width() != right.width() || left.height() != right.height()) {
     throw InputError(fmt::format("{}: left images are {}x{} but right images {}x{}", dataset_.root.string(),
                                  left.width(), left.height(), right.width(), right.height()));
@@ -48,10 +60,10 @@ ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& opt
   info_.kind = SourceKind::kRaw;
   info_.width = left.width();
   info_.height = left.height();
-  info_.expected_frames = static_cast<std::int64_t>(count_);
+  info_.expected_frames = static_cast<std::int64_t>(count_ - index_);
   info_.nominal_rate_hz = medianRate(dataset_);
-  info_.description =
-      fmt::format("raw images {} ({} frames, {}x{})", dataset_.root.string(), count_, info_.width, info_.height);
+  info_.description = fmt::format("raw images {} ({} frames{}, {}x{})", dataset_.root.string(), count_ - index_,
+                                  startNote(index_), info_.width, info_.height);
 }
 
 bool ImageDatasetSource::next(RawStereoFrame& frame) {
@@ -96,15 +108,18 @@ VideoFolderSource::VideoFolderSource(Dataset dataset, const ReplayOptions& optio
     throw InputError(fmt::format("{}: cam0 video is {}x{} but cam1 video {}x{}", dataset_.root.string(), left.width,
                                  left.height, right.width, right.height));
   }
-  count_ = frameLimit(dataset_.frames.size(), options.max_frames);
+  count_ = frameEnd(dataset_, options);
   if (count_ == 0) throw InputError(dataset_.root.string() + ": no stereo frames");
+  // Decoding starts at the first frame whatever the start: later frames reference earlier ones.
+  const auto first = static_cast<std::size_t>(options.first_frame);
   info_.kind = SourceKind::kEncoded;
   info_.width = left.width;
   info_.height = left.height;
-  info_.expected_frames = static_cast<std::int64_t>(count_);
+  info_.expected_frames = static_cast<std::int64_t>(count_ - first);
+  info_.first_tracked_frame = static_cast<std::int64_t>(first);
   info_.nominal_rate_hz = medianRate(dataset_);
-  info_.description = fmt::format("video {} ({} frames, 2x {}x{} {})", dataset_.root.string(), count_, left.width,
-                                  left.height, left.codec_name);
+  info_.description = fmt::format("video {} ({} frames{}, 2x {}x{} {})", dataset_.root.string(), count_ - first,
+                                  startNote(first), left.width, left.height, left.codec_name);
 }
 
 VideoFolderSource::~VideoFolderSource() = default;

@@ -18,7 +18,10 @@ namespace voca {
 
 // How a recorded dataset is replayed.
 struct ReplayOptions {
-  int max_frames = 0;  // 0 = all
+  // Track frames [first_frame, first_frame + max_frames) of the dataset (max_frames 0 = to the end).
+  // A later start is how the evaluation harness repeats a run with a different history.
+  int first_frame = 0;
+  int max_frames = 0;
   // A video that ends before its data.csv does: true throws InputError (naming the camera and the
   // frame); false ends the replay there and reports it in warnings().
   bool strict = true;

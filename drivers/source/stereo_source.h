@@ -38,7 +38,10 @@ struct SourceInfo {
   SourceKind kind = SourceKind::kRaw;
   std::string description;           // one line for logs, e.g. "video folder seq-500k (2x 752x480 h264)"
   int width = 0, height = 0;         // image size of each camera
-  std::int64_t expected_frames = 0;  // 0 when unknown (live input)
+  std::int64_t expected_frames = 0;  // frames to track; 0 when unknown (live input)
+  // kEncoded replay from a later frame: frames before this index are delivered so the decoder has
+  // their references, but are not tracked (the decode stage lets them go).
+  std::int64_t first_tracked_frame = 0;
   // Frames arrive at the sensor's pace whether or not anyone is ready (cameras, network): the
   // pipeline drops the oldest waiting frame instead of making the source wait.
   bool live = false;

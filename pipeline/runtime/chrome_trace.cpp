@@ -48,6 +48,8 @@ const char* reasonName(ReleaseReason reason) {
       return "damaged";
     case ReleaseReason::kAborted:
       return "aborted";
+    case ReleaseReason::kNotTracked:
+      return "not tracked";
     default:
       return "done";
   }

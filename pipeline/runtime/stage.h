@@ -16,10 +16,11 @@ namespace voca::pipeline {
 
 // Why a slot leaves the pipeline before its last stage.
 enum class ReleaseReason : std::uint8_t {
-  kDone,     // passed every stage
-  kDropped,  // the live policy dropped it: a later frame was waiting
-  kDamaged,  // its data could not be decoded; skipped
-  kAborted,  // a stage failed; the pipeline is shutting down
+  kDone,        // passed every stage
+  kDropped,     // the live policy dropped it: a later frame was waiting
+  kDamaged,     // its data could not be decoded; skipped
+  kAborted,     // a stage failed; the pipeline is shutting down
+  kNotTracked,  // decoded only as a reference for later frames (before the run's first tracked frame)
 };
 
 // Where a stage sends slots: on to the next stage, or out of the pipeline.

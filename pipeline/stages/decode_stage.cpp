@@ -102,7 +102,9 @@ struct DecodeStage::Impl {
       at(0) = Pending{};
       head = (head + 1) % kMaxPending;
       --size;
-      if (!p.damaged) {
+      if (p.slot->frameIndex() < options.first_tracked_frame) {
+        out.release(*p.slot, ReleaseReason::kNotTracked);
+      } else if (!p.damaged) {
         p.slot->frame.has_motion = options.decoder.export_motion;
         out.forward(*p.slot);
       } else {

@@ -21,6 +21,9 @@ namespace voca::pipeline {
 struct DecodeStageOptions {
   decode::DecoderOptions decoder;  // its `strict` decides: stop on the first damaged frame, or skip
   std::array<std::string, 2> names = {"cam0", "cam1"};  // for messages
+  // Frames before this index are decoded for their references and then let go, not tracked
+  // (SourceInfo::first_tracked_frame).
+  std::int64_t first_tracked_frame = 0;
 };
 
 class DecodeStage final : public Stage {

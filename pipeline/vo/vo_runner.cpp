@@ -110,6 +110,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
     throw InputError(fmt::format("{}: a stream carries no calibration; pass the cameras' with --calib", url));
   }
   if (options.encode_bitrate_bps > 0) throw InputError(fmt::format("{}: --encode applies to raw datasets only", url));
+  if (options.first_frame > 0) throw InputError(fmt::format("{}: --start-frame applies to recordings only", url));
   const StereoRig rig = loadCalibration(*options.calibration);
   if (rig.cameras.size() < 2) {
     throw InputError(fmt::format("{}: need a stereo calibration", options.calibration->string()));
@@ -184,6 +185,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   }
 
   ReplayOptions replay;
+  replay.first_frame = options.first_frame;
   replay.max_frames = options.max_frames;
   replay.strict = options.strict;
   std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);
@@ -245,6 +247,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     decode_options.decoder.skip_loop_filter = options.skip_deblock;
     decode_options.decoder.export_qp = config.frontend.prior_max_qp > 0;  // only the QP check reads them
     decode_options.decoder.log_choice = false;
+    decode_options.first_tracked_frame = info.first_tracked_frame;
     for (std::size_t c = 0; c < 2; ++c) {
       decode_options.names[c] = info.stream_names[c].empty() ? fmt::format("cam{}", c) : info.stream_names[c];
     }

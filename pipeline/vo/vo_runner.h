@@ -35,6 +35,7 @@ struct VoRunOptions {
   std::optional<PriorMode> mode;                      // overrides the config's frontend.prior_mode
   std::optional<bool> bridge_iframes;                 // overrides the config's frontend.bridge_iframes
   std::int64_t encode_bitrate_bps = 0;  // raw datasets: encode (two-pass x264, the paper's way) to a temp folder first
+  int first_frame = 0;                  // track from this frame of the dataset (video: decoded from 0)
   int max_frames = 0;                   // 0 = all
   int max_points = 1000;                // frontend capacity per camera
   bool estimate = true;                 // false: frontend only (`voca track`)
@@ -105,7 +106,7 @@ RunConfig resolveRunConfig(const std::optional<std::filesystem::path>& config, b
 VoRunResult runVisualOdometry(const VoRunOptions& options);
 
 // The same on an input that is already open (a live camera, a network stream, a test's source):
-// options' input, calibration, config, ground_truth, encode_bitrate_bps and max_frames are not used;
+// options' input, calibration, config, ground_truth, encode_bitrate_bps, first_frame and max_frames are not used;
 // its mode and bridge_iframes still override the config's. Does not write options.statistics_file
 // (the caller does, after adding its own warnings). ground_truth, when given, is evaluated against.
 VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, const VocaConfig& config,

@@ -19,6 +19,7 @@ using voca::cli::Runner;
 struct RunOptions {
   std::string input, calib, config, mode, bridge, encode, out, gt, format = "tum";
   int frames = 0;
+  int start_frame = 0;
   int max_points = 1000;
   double stream_timeout = 3.0, stream_wait = 30.0;
   voca::cli::PipelineCli pipeline;
@@ -35,6 +36,8 @@ int runRun(const RunOptions& o) {
   if (!o.encode.empty()) options.encode_bitrate_bps = voca::encode::parseBitrate(o.encode);
   if (o.frames < 0) throw voca::InputError("--frames: expected 0 (all) or a positive count");
   options.max_frames = o.frames;
+  if (o.start_frame < 0) throw voca::InputError("--start-frame: expected 0 (the first frame) or a positive index");
+  options.first_frame = o.start_frame;
   options.max_points = o.max_points;
   if (!(o.stream_timeout > 0.0) || !(o.stream_wait > 0.0)) {
     throw voca::InputError("--stream-timeout and --stream-wait: expected positive seconds");
@@ -81,6 +84,10 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--gt", o->gt,
                      "Ground truth for ATE/RTE (TUM/EuRoC/KITTI; default: the dataset's own, when it has one)");
       app.add_option("--frames", o->frames, "Process only the first N frames (0 = all)")->capture_default_str();
+      app.add_option("--start-frame", o->start_frame,
+                     "Track from this frame of the dataset on (videos are still decoded from their start); "
+                     "--frames then counts from it")
+          ->capture_default_str();
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
       app.add_option("--stream-wait", o->stream_wait, "Stream URL: seconds to wait for the stream to begin")
           ->capture_default_str();
