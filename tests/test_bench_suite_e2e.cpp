@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -184,6 +185,55 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   REQUIRE_FALSE(room[11].empty());
   CHECK(std::stod(room[11]) == doctest::Approx(std::stod(room[2])).epsilon(1e-6));  // the same trajectory
   CHECK(readCsv(out / "results.csv").size() == 1 + 5 + 2);  // header, 5 runs with results, 2 external
+}
+
+TEST_CASE("voca bench suite with repeats: each cell is the median of runs tracking from later frames") {
+  voca::test::ScratchDir dir("bench-suite-repeats");
+  const fs::path out = dir / "out";
+  const json suite = {
+      {"name", "repeats"},
+      {"sequences",
+       {{{"name", "room"}, {"synth", {"--motion", "aggressive", "--seconds", "1", "--supersample", "1"}}}}},
+      {"bitrates", {"raw"}},
+      {"modes", {"none"}},
+      {"repeats", 3},
+      {"repeat_step_frames", 3},
+      {"run_args", {"--threads", "1"}}};
+  voca::test::writeText(dir / "suite.json", suite.dump(2));
+  std::string output;
+  REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string() + " --jobs 2",
+                         output, dir / "log.txt") == 0);
+  CAPTURE(output);
+  const auto results = readCsv(out / "results.csv");
+  REQUIRE(results.size() == 1 + 3);
+  const auto& header = results[0];
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    REQUIRE(it != header.end());
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  std::vector<double> ate, rte;
+  std::set<std::string> repeats;
+  for (std::size_t r = 1; r < results.size(); ++r) {
+    const auto& row = results[r];
+    REQUIRE_MESSAGE(row[column("status")] == "ok", row[column("reason")]);
+    repeats.insert(row[column("repeat")]);
+    // 20 frames; repeat k tracks from frame 3k.
+    CHECK(std::stoi(row[column("frames")]) == 20 - 3 * std::stoi(row[column("repeat")]));
+    ate.push_back(std::stod(row[column("ate_m")]));
+    rte.push_back(std::stod(row[column("rte_m")]));
+  }
+  CHECK(repeats == std::set<std::string>{"0", "1", "2"});
+  std::sort(ate.begin(), ate.end());
+  std::sort(rte.begin(), rte.end());
+  // The table's one cell per metric: the middle repeat (columns: row, greyed, (value, shown, rank) ATE, RTE).
+  const auto table = readCsv(out / "tables" / "raw.csv");
+  REQUIRE(table.size() == 1 + 1 + 3);
+  CHECK(table[1][0] == "room");
+  CHECK(std::stod(table[1][2]) == doctest::Approx(ate[1]).epsilon(1e-6));
+  CHECK(std::stod(table[1][5]) == doctest::Approx(rte[1]).epsilon(1e-6));
+  CHECK(readText(out / "summary.md").find("median of 3 runs tracking from frames 0, 3, 6") != std::string::npos);
+  CHECK(readText(out / "tables" / "raw.md").find("median of 3 runs from frames 0, 3, 6") != std::string::npos);
 }
 
 TEST_CASE("the shipped default suite: every cell filled, sizes rise with bitrate, every mode in the summary") {

@@ -66,6 +66,13 @@ TEST_CASE("suite files: unknown keys, wrong values and missing folders are error
   CHECK(errorOf(suite).find("leave out --out") != std::string::npos);
 
   suite = synthSuite();
+  suite["repeats"] = 0;
+  CHECK(errorOf(suite).find("s.json: repeats: expected a value in [1, 99], got 0") != std::string::npos);
+  suite = synthSuite();
+  suite["repeat_step_frames"] = 0.5;
+  CHECK(errorOf(suite).find("repeat_step_frames: expected an integer") != std::string::npos);
+
+  suite = synthSuite();
   suite["rules"] = {{"ate_divergence_m", -1}};
   CHECK(errorOf(suite).find("rules.ate_divergence_m: expected a positive number") != std::string::npos);
 
@@ -116,6 +123,44 @@ TEST_CASE("planSuite: one encoding per sequence and bitrate, raw runs the baseli
   // The suite written to the output folder reads back to the same plan.
   const voca::harness::Suite again = voca::harness::parseSuite(voca::harness::suiteToJson(parsed), "/x", "again");
   CHECK(voca::harness::planSuite(again, "/out", "/bin/voca").runs.size() == plan.runs.size());
+}
+
+TEST_CASE("planSuite: repeats track from later frames, each its own folder; repeat 0 is the run without repeats") {
+  json suite = synthSuite();
+  suite["bitrates"] = {"500k"};
+  suite["modes"] = {"none", "mv_parallel_of"};
+  suite["bridging"] = {true};
+  suite["frames"] = 30;
+  const voca::harness::SuitePlan single =
+      voca::harness::planSuite(voca::harness::parseSuite(suite, "/base", "s.json"), "/out", "/bin/voca");
+  suite["repeats"] = 3;
+  suite["repeat_step_frames"] = 4;
+  const voca::harness::Suite parsed = voca::harness::parseSuite(suite, "/base", "s.json");
+  const voca::harness::SuitePlan plan = voca::harness::planSuite(parsed, "/out", "/bin/voca");
+  REQUIRE(plan.runs.size() == 3 * single.runs.size());
+  CHECK(plan.encodes.size() == single.encodes.size());  // repeats share the encoding
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < plan.runs.size(); ++i) {
+    const voca::harness::PlannedRun& run = plan.runs[i];
+    ids.insert(run.job.id);
+    const voca::harness::PlannedRun& first = single.runs[i / 3];
+    CHECK(run.repeat == static_cast<int>(i % 3));
+    CHECK(run.system == first.system);
+    const std::string line = voca::harness::shellCommand(run.job.argv);
+    CAPTURE(line);
+    CHECK(line.find("--frames 30") != std::string::npos);
+    if (run.repeat == 0) {
+      CHECK(run.job.id == first.job.id);  // results of a suite without repeats still count
+      CHECK(run.job.argv == first.job.argv);
+    } else {
+      CHECK(run.job.id == first.job.id + "_r" + std::to_string(run.repeat));
+      CHECK(line.find("--start-frame " + std::to_string(4 * run.repeat)) != std::string::npos);
+    }
+  }
+  CHECK(ids.size() == plan.runs.size());
+  const voca::harness::Suite again = voca::harness::parseSuite(voca::harness::suiteToJson(parsed), "/x", "again");
+  CHECK(again.repeats == 3);
+  CHECK(again.repeat_step_frames == 4);
 }
 
 TEST_CASE("planSuite: encodings made elsewhere are used as given; a video folder runs every mode as recorded") {

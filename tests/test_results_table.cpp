@@ -212,3 +212,47 @@ TEST_CASE("compareWithBaseline: mean and worst relative change over the sequence
   CHECK(self.worse_than_tolerance == 0);
   CHECK_THROWS_AS(voca::compareWithBaseline(t, 2, 0, TableMetric::kAte, 0.05), std::invalid_argument);
 }
+
+TEST_CASE("medianOfRepeats: each metric's middle repeat, crashes as the worst, the worse middle of an even count") {
+  // Three clean repeats: each metric on its own (ATE from the first, RTE from the third).
+  RunMetrics m = voca::medianOfRepeats({*ok(0.05, 0.030), *ok(0.09, 0.010), *ok(0.02, 0.020)});
+  CHECK(m.outcome == RunOutcome::kCompleted);
+  CHECK(m.ate_m == 0.05);
+  REQUIRE(m.rte_m);
+  CHECK(*m.rte_m == 0.020);
+  CHECK(m.reset_free_fraction == 1.0);
+
+  // One crash of three: the median is the worse of the two that ran.
+  m = voca::medianOfRepeats({*ok(0.05, 0.030), *crashed(), *ok(0.02, 0.020)});
+  CHECK(m.outcome == RunOutcome::kCompleted);
+  CHECK(m.ate_m == 0.05);
+  CHECK(*m.rte_m == 0.030);
+  CHECK(m.reset_free_fraction == 1.0);
+
+  // Two crashes of three: a crash, shown as x.
+  m = voca::medianOfRepeats({*crashed(), *crashed(), *ok(0.02, 0.020)});
+  CHECK(m.outcome == RunOutcome::kCrashed);
+  CHECK(voca::classifyRun(m, TableMetric::kAte, {}).kind == CellKind::kCrashed);
+
+  // Resets: the fraction's median decides R (two of three reset -> R), the errors stay values.
+  m = voca::medianOfRepeats({*resetting(0.01, 0.01), *resetting(0.03, 0.02), *ok(0.02, 0.03)});
+  CHECK(m.reset_free_fraction == 0.4);
+  CHECK(voca::classifyRun(m, TableMetric::kAte, {}).kind == CellKind::kReset);
+  m = voca::medianOfRepeats({*resetting(0.01, 0.01), *ok(0.03, 0.02), *ok(0.02, 0.03)});
+  CHECK(m.reset_free_fraction == 1.0);
+  CHECK(voca::classifyRun(m, TableMetric::kAte, {}).kind == CellKind::kValue);
+
+  // Even count: the worse middle; a missing RTE counts as infinite.
+  m = voca::medianOfRepeats({*ok(0.01, 0.01), *ok(0.04, 0.04), *ok(0.02, 0.02), *ok(0.03, 0.03)});
+  CHECK(m.ate_m == 0.03);
+  CHECK(*m.rte_m == 0.03);
+  m = voca::medianOfRepeats({RunMetrics{RunOutcome::kCompleted, 0.01, std::nullopt, 1.0},
+                             RunMetrics{RunOutcome::kCompleted, 0.02, std::nullopt, 1.0}, *ok(0.03, 0.03)});
+  CHECK_FALSE(m.rte_m);
+
+  // One repeat is itself.
+  m = voca::medianOfRepeats({*resetting(0.07, 0.02)});
+  CHECK(m.ate_m == 0.07);
+  CHECK(m.reset_free_fraction == 0.4);
+  CHECK_THROWS_AS(voca::medianOfRepeats({}), std::invalid_argument);
+}

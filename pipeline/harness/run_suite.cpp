@@ -170,6 +170,16 @@ std::optional<RunMetrics> metricsFromResult(const json& result) {
   return metrics;
 }
 
+// The cell of one (sequence, bitrate, system): the median over its repeats once all have a result (an
+// external system's single run stands alone); nothing while a repeat is missing.
+std::optional<RunMetrics> metricsOfRepeats(const std::vector<json>& results, int repeats) {
+  if (results.size() == 1 && !results.front().contains("repeat")) return metricsFromResult(results.front());
+  if (results.size() < static_cast<std::size_t>(repeats)) return std::nullopt;
+  std::vector<RunMetrics> metrics;
+  for (const json& result : results) metrics.push_back(*metricsFromResult(result));
+  return medianOfRepeats(metrics);
+}
+
 // An external system's trajectory against the sequence's ground truth, like a VOCA-RT run's result.
 json evaluateExternal(const ExternalRun& external, const fs::path& dataset_dir,
                       const std::optional<fs::path>& ground_truth, int max_frames) {
@@ -448,8 +458,8 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
   const Suite suite = parseSuite(*suite_json, out, (out / "suite.json").string());
   const SuitePlan plan = planSuite(suite, out, voca_executable);
 
-  // Results by (sequence, bitrate, system).
-  std::map<std::tuple<std::string, std::string, std::string>, json> results;
+  // Results by (sequence, bitrate, system), one per repeat.
+  std::map<std::tuple<std::string, std::string, std::string>, std::vector<json>> results;
   std::vector<json> rows;
   for (const PlannedRun& run : plan.runs) {
     std::optional<json> result = readJson(resultFile(run.job.output));
@@ -460,7 +470,8 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
       if (result->value("status", "") == "ok") writeFile(resultFile(run.job.output), result->dump(2) + "\n");
     }
     if (!result) continue;
-    results[{run.sequence, run.bitrate, run.system}] = *result;
+    (*result)["repeat"] = run.repeat;
+    results[{run.sequence, run.bitrate, run.system}].push_back(*result);
     rows.push_back(*result);
   }
   for (const ExternalRun& external : suite.external) {
@@ -468,7 +479,7 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
                                        [&](const SuiteSequence& s) { return s.name == external.sequence; });
     const fs::path dataset = sequence->synth_args.empty() ? sequence->path : out / "sequences" / sequence->name;
     json result = evaluateExternal(external, dataset, sequence->ground_truth, suite.frames);
-    results[{external.sequence, external.bitrate, external.system}] = result;
+    results[{external.sequence, external.bitrate, external.system}] = {result};
     rows.push_back(result);
   }
 
@@ -476,6 +487,16 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
   std::vector<std::string> sequences;
   for (const SuiteSequence& s : suite.sequences) sequences.push_back(s.name);
   std::string summary_md = fmt::format("# {}: summary\n\n", suite.name);
+  std::string starts;  // "0, 5, 10": the frames the repeats track from
+  for (int r = 0; r < suite.repeats; ++r) {
+    starts += fmt::format("{}{}", r > 0 ? ", " : "", r * suite.repeat_step_frames);
+  }
+  if (suite.repeats > 1) {
+    summary_md += fmt::format(
+        "Every VOCA-RT cell is the median of {} runs tracking from frames {} (each metric on its own; "
+        "results.csv lists every run, column repeat)\n\n",
+        suite.repeats, starts);
+  }
   std::string summary_csv = "system,bitrate,sequences,med_ate_m,med_rte_m,avg_ate_m,avg_rte_m,sr_ate,sr_rte\n";
   const auto number = [](const TableCell& cell) {
     return cell.kind == CellKind::kValue ? fmt::format("{:.9g}", cell.value) : std::string();
@@ -497,11 +518,12 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
       auto& row = runs.emplace_back();
       for (const TableSystem& system : systems) {
         const auto it = results.find({sequence, bitrate, system.name});
-        row.push_back(it == results.end() ? std::nullopt : metricsFromResult(it->second));
+        row.push_back(it == results.end() ? std::nullopt : metricsOfRepeats(it->second, suite.repeats));
       }
     }
     const ResultsTable table = buildResultsTable(systems, sequences, runs, suite.rules);
-    const std::string title = bitrate == "raw" ? "raw images" : fmt::format("{}bit/s per camera", bitrate);
+    std::string title = bitrate == "raw" ? "raw images" : fmt::format("{}bit/s per camera", bitrate);
+    if (suite.repeats > 1) title += fmt::format(", median of {} runs from frames {}", suite.repeats, starts);
     const fs::path base = out / "tables" / bitrate;
     writeFile(base.string() + ".md", tableMarkdown(table, fmt::format("{}: {}", suite.name, title), suite.rules));
     writeFile(base.string() + ".csv", tableCsv(table));
@@ -574,25 +596,11 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
     written.push_back(out / "against_none.csv");
   }
 
-  const std::vector<std::string> columns = {"id",
-                                            "system",
-                                            "sequence",
-                                            "bitrate",
-                                            "mode",
-                                            "bridge",
-                                            "config",
-                                            "status",
-                                            "ate_m",
-                                            "rte_m",
-                                            "reset_free_fraction",
-                                            "resets",
-                                            "frames",
-                                            "video_bytes",
-                                            "wall_s",
-                                            "statistics",
-                                            "trajectory",
-                                            "ground_truth",
-                                            "reason"};
+  const std::vector<std::string> columns = {"id",         "system",     "sequence",     "bitrate",
+                                            "mode",       "repeat",     "bridge",       "config",
+                                            "status",     "ate_m",      "rte_m",        "reset_free_fraction",
+                                            "resets",     "frames",     "video_bytes",  "wall_s",
+                                            "statistics", "trajectory", "ground_truth", "reason"};
   std::string csv;
   for (const std::string& column : columns) csv += fmt::format("{}{}", csv.empty() ? "" : ",", column);
   csv += "\n";

@@ -154,6 +154,8 @@ const ConfigField<Suite> kSuiteFields[] = {
        });
      }}},
     {"frames", &Suite::frames, 0.0, static_cast<double>(kConfigIntLimit)},
+    {"repeats", &Suite::repeats, 1.0, 99.0},
+    {"repeat_step_frames", &Suite::repeat_step_frames, 1.0, 10000.0},
     {"encode_fps", Reader<Suite>{[](Suite& s, const ConfigValue& v, const std::string& at) {
        s.encode_fps = v.json().is_number_integer() ? std::to_string(v.json().get<int>()) : v.string(at);
      }}},
@@ -254,6 +256,8 @@ json suiteToJson(const Suite& suite) {
             {"modes", suite.modes},
             {"bridging", suite.bridging},
             {"frames", suite.frames},
+            {"repeats", suite.repeats},
+            {"repeat_step_frames", suite.repeat_step_frames},
             {"encode_fps", suite.encode_fps},
             {"decoded_png", suite.decoded_png},
             {"rules",
@@ -330,38 +334,45 @@ SuitePlan planSuite(const Suite& suite, const fs::path& out, const std::string& 
           for (const bool bridge : suite.bridging) {
             const bool varies = mode != "none";
             if (!varies && !bridge && std::count(suite.bridging.begin(), suite.bridging.end(), true) > 0) continue;
-            PlannedRun run;
-            run.sequence = sequence.name;
-            run.bitrate = bitrate;
-            run.mode = mode;
-            run.bridge = varies ? bridge : true;
-            run.config = config;
-            run.suite_config = suite_config;
-            run.system = systemName(mode, run.bridge, suite_config);
-            run.preparation_id = preparation;
-            run.input = input;
-            std::string id = sequence.name + "_" + bitrate + "_" + mode;
-            if (!run.bridge) id += "_nobridge";
-            if (several_configs) id += fmt::format("_{}", configLabel(suite_config));
-            run.job.id = id;
-            run.job.output = out / "runs" / id;
-            std::vector<std::string>& argv = run.job.argv;
-            argv = {voca,
-                    "run",
-                    input.string(),
-                    "--out",
-                    trajectoryFile(run.job.output).string(),
-                    "--stats",
-                    statisticsFile(run.job.output).string(),
-                    "--mode",
-                    mode};
-            if (varies) argv.insert(argv.end(), {"--bridge", bridge ? "on" : "off"});
-            if (!config.empty()) argv.insert(argv.end(), {"--config", config});
-            if (sequence.calibration) argv.insert(argv.end(), {"--calib", sequence.calibration->string()});
-            if (sequence.ground_truth) argv.insert(argv.end(), {"--gt", sequence.ground_truth->string()});
-            if (suite.frames > 0) argv.insert(argv.end(), {"--frames", std::to_string(suite.frames)});
-            argv.insert(argv.end(), suite.run_args.begin(), suite.run_args.end());
-            plan.runs.push_back(std::move(run));
+            for (int repeat = 0; repeat < suite.repeats; ++repeat) {
+              PlannedRun run;
+              run.repeat = repeat;
+              run.sequence = sequence.name;
+              run.bitrate = bitrate;
+              run.mode = mode;
+              run.bridge = varies ? bridge : true;
+              run.config = config;
+              run.suite_config = suite_config;
+              run.system = systemName(mode, run.bridge, suite_config);
+              run.preparation_id = preparation;
+              run.input = input;
+              std::string id = sequence.name + "_" + bitrate + "_" + mode;
+              if (!run.bridge) id += "_nobridge";
+              if (several_configs) id += fmt::format("_{}", configLabel(suite_config));
+              if (repeat > 0) id += fmt::format("_r{}", repeat);  // repeat 0 keeps the id of a suite without repeats
+              run.job.id = id;
+              run.job.output = out / "runs" / id;
+              std::vector<std::string>& argv = run.job.argv;
+              argv = {voca,
+                      "run",
+                      input.string(),
+                      "--out",
+                      trajectoryFile(run.job.output).string(),
+                      "--stats",
+                      statisticsFile(run.job.output).string(),
+                      "--mode",
+                      mode};
+              if (varies) argv.insert(argv.end(), {"--bridge", bridge ? "on" : "off"});
+              if (!config.empty()) argv.insert(argv.end(), {"--config", config});
+              if (sequence.calibration) argv.insert(argv.end(), {"--calib", sequence.calibration->string()});
+              if (sequence.ground_truth) argv.insert(argv.end(), {"--gt", sequence.ground_truth->string()});
+              if (repeat > 0) {
+                argv.insert(argv.end(), {"--start-frame", std::to_string(repeat * suite.repeat_step_frames)});
+              }
+              if (suite.frames > 0) argv.insert(argv.end(), {"--frames", std::to_string(suite.frames)});
+              argv.insert(argv.end(), suite.run_args.begin(), suite.run_args.end());
+              plan.runs.push_back(std::move(run));
+            }
           }
         }
       }

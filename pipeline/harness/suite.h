@@ -48,9 +48,14 @@ struct Suite {
   std::vector<bool> bridging = {true};
   std::vector<std::string> configs = {""};  // shipped name or file; "" = the dataset's default
   int frames = 0;                           // 0 = all
-  std::string encode_fps = "30";            // `voca encode --fps`: the paper's 30 for every dataset
-  bool decoded_png = false;                 // also write the decoded frames as EuRoC folders
-  std::vector<std::string> run_args;        // appended to every `voca run` (e.g. --threads 1)
+  // Each run this many times, repeat r tracking from frame r * repeat_step_frames (`voca run
+  // --start-frame`); the tables show the median over the repeats (medianOfRepeats). A deterministic VO's
+  // error moves a lot with a small change of its input, so one run per cell overstates differences.
+  int repeats = 1;
+  int repeat_step_frames = 5;
+  std::string encode_fps = "30";      // `voca encode --fps`: the paper's 30 for every dataset
+  bool decoded_png = false;           // also write the decoded frames as EuRoC folders
+  std::vector<std::string> run_args;  // appended to every `voca run` (e.g. --threads 1)
   TableRules rules;
   std::vector<ExternalRun> external;
   std::vector<std::string> notes;  // e.g. optional sequences that were not found
@@ -79,6 +84,7 @@ struct Job {
 struct PlannedRun {
   Job job;
   std::string sequence, bitrate, mode, config;
+  int repeat = 0;            // 0 .. suite.repeats - 1
   std::string suite_config;  // the suite's config of its column (config is the sequence's own when it has one)
   bool bridge = true;
   std::string system;          // its column in the tables: mode, "no bridge", config when several

@@ -86,7 +86,9 @@ Runner configureSuiteBench(CLI::App& app) {
       "each run is a child `voca run` writing <out>/runs/<id>/{trajectory.txt,stats.json,log.txt,\n"
       "result.json}. A run that crashes or fails is recorded as x and the suite goes on; a second call\n"
       "skips what is done. Tables follow the paper's rules: <out>/tables/<bitrate>.{md,csv,tex},\n"
-      "<out>/summary.md, with each prior mode against `none` (also <out>/against_none.csv). Cluster:\n"
+      "<out>/summary.md, with each prior mode against `none` (also <out>/against_none.csv). With\n"
+      "\"repeats\": N each VOCA-RT cell is the median of N runs tracking from frames 0, s, 2s ...\n"
+      "(s = \"repeat_step_frames\", default 5), since one run's error depends on its luck. Cluster:\n"
       "--emit-jobs synth, then encode, then run, each | parallel (or a Slurm array), then\n"
       "`voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
   return [o] { return runSuiteCommand(*o); };

@@ -156,6 +156,30 @@ ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std
   return table;
 }
 
+RunMetrics medianOfRepeats(const std::vector<RunMetrics>& repeats) {
+  if (repeats.empty()) throw std::invalid_argument("medianOfRepeats: no repeats");
+  // Sorted ascending, the worse middle value of an even count is at size / 2.
+  const auto middle = [](std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    return values[values.size() / 2];
+  };
+  std::vector<double> ate, rte, reset_free;
+  for (const RunMetrics& r : repeats) {
+    const bool crashed = r.outcome == RunOutcome::kCrashed;
+    ate.push_back(crashed ? kInfinity : r.ate_m);
+    rte.push_back(crashed || !r.rte_m ? kInfinity : *r.rte_m);
+    reset_free.push_back(crashed ? kInfinity : -r.reset_free_fraction);  // negated: a lower fraction is worse
+  }
+  RunMetrics result;
+  result.ate_m = middle(ate);
+  if (std::isinf(result.ate_m)) return RunMetrics{RunOutcome::kCrashed, 0.0, std::nullopt, 0.0};
+  const double median_rte = middle(rte);
+  if (!std::isinf(median_rte)) result.rte_m = median_rte;
+  const double median_reset_free = middle(reset_free);
+  result.reset_free_fraction = std::isinf(median_reset_free) ? 0.0 : -median_reset_free;
+  return result;
+}
+
 BaselineComparison compareWithBaseline(const ResultsTable& table, std::size_t system, std::size_t baseline,
                                        TableMetric metric, double tolerance) {
   if (system >= table.systems.size() || baseline >= table.systems.size()) {

@@ -77,6 +77,14 @@ struct ResultsTable {
 // The cell one run gets under the rules: divergence beats R, R beats a value.
 TableCell classifyRun(const std::optional<RunMetrics>& run, TableMetric metric, const TableRules& rules);
 
+// One result from repeats of the same run (the harness repeats a run from a few frames later, since a
+// deterministic VO's error moves a lot with small changes of its input). Each of ATE, RTE and the
+// reset-free fraction is the median over the repeats on its own, a crashed repeat counting as the
+// worst (infinite error, fraction 0) and a missing RTE as infinite; the result is a crash when that
+// median of ATE is. With an even count the worse of the two middle values is taken. Throws
+// std::invalid_argument for no repeats.
+RunMetrics medianOfRepeats(const std::vector<RunMetrics>& repeats);
+
 // runs[sequence][system]: empty optionals are runs without a result. Throws std::invalid_argument when
 // the shape does not match the names.
 ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std::string> sequences,
