@@ -234,6 +234,22 @@ TEST_CASE("voca bench suite with repeats: each cell is the median of runs tracki
   CHECK(std::stod(table[1][5]) == doctest::Approx(rte[1]).epsilon(1e-6));
   CHECK(readText(out / "summary.md").find("median of 3 runs tracking from frames 0, 3, 6") != std::string::npos);
   CHECK(readText(out / "tables" / "raw.md").find("median of 3 runs from frames 0, 3, 6") != std::string::npos);
+
+  // Bounds of the sequence's own: an RTE bound below what it reached makes its RTE cell divergent (the
+  // suite's 10 cm would not), and the table names the sequence's bounds.
+  json strict = suite;
+  strict["sequences"][0]["rules"] = {{"rte_divergence_m", 1e-6}};
+  voca::test::writeText(dir / "suite.json", strict.dump(2));
+  REQUIRE(runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string(), output,
+                         dir / "log2.txt") == 0);
+  CHECK(output.find("3 runs, 3 done before, 0 run now") != std::string::npos);  // the runs are reused
+  const auto bounded = readCsv(out / "tables" / "raw.csv");
+  REQUIRE(bounded.size() == 1 + 1 + 3);
+  CHECK(bounded[1][5].empty());  // RTE: no value, shown as divergent
+  CHECK(bounded[1][6].find("∞") != std::string::npos);
+  CHECK(std::stod(bounded[1][2]) == doctest::Approx(ate[1]).epsilon(1e-6));  // ATE keeps the paper's bound
+  CHECK(readText(out / "tables" / "raw.md")
+            .find("Sequences with bounds of their own: room (ATE > 10 m, RTE > 0.0001 cm") != std::string::npos);
 }
 
 TEST_CASE("the shipped default suite: every cell filled, sizes rise with bitrate, every mode in the summary") {

@@ -66,6 +66,23 @@ TEST_CASE("suite files: unknown keys, wrong values and missing folders are error
   CHECK(errorOf(suite).find("leave out --out") != std::string::npos);
 
   suite = synthSuite();
+  suite["sequences"][1]["rules"] = {{"rte_divergence_m", 0}};
+  CHECK(errorOf(suite).find("sequences[1].rules.rte_divergence_m: expected a positive number") != std::string::npos);
+  suite["sequences"][1]["rules"] = {{"rte_divrgence_m", 1}};
+  CHECK(errorOf(suite).find("sequences[1].rules.rte_divrgence_m: unknown key") != std::string::npos);
+  suite["sequences"][1]["rules"] = {{"rte_divergence_m", 1.5}};
+  {
+    const voca::harness::Suite own = voca::harness::parseSuite(suite, ".", "s.json");
+    CHECK_FALSE(own.sequences[0].rules);
+    REQUIRE(own.sequences[1].rules);
+    CHECK(own.sequences[1].rules->rte_divergence_m == 1.5);
+    CHECK(own.sequences[1].rules->ate_divergence_m == voca::TableRules{}.ate_divergence_m);  // the paper's
+    const voca::harness::Suite again = voca::harness::parseSuite(voca::harness::suiteToJson(own), ".", "again");
+    REQUIRE(again.sequences[1].rules);
+    CHECK(again.sequences[1].rules->rte_divergence_m == 1.5);
+  }
+
+  suite = synthSuite();
   suite["repeats"] = 0;
   CHECK(errorOf(suite).find("s.json: repeats: expected a value in [1, 99], got 0") != std::string::npos);
   suite = synthSuite();

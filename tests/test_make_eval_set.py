@@ -77,6 +77,9 @@ class WriteSuite(unittest.TestCase):
             self.assertNotIn("encoded", by_name["tumvi_room1_512_16-clean"])
             self.assertEqual(by_name["kitti06"]["path"], str(kitti.resolve()))
             self.assertEqual(by_name["kitti06"]["config"], "kitti")
+            self.assertEqual(by_name["kitti06"]["rules"], {"rte_divergence_m": 1.0})  # a street's 6 frames span metres
+            self.assertNotIn("rules", blur)
+            self.assertEqual(suite["repeats"], 3)
 
 
 if __name__ == "__main__":

@@ -256,3 +256,19 @@ TEST_CASE("medianOfRepeats: each metric's middle repeat, crashes as the worst, t
   CHECK(m.reset_free_fraction == 0.4);
   CHECK_THROWS_AS(voca::medianOfRepeats({}), std::invalid_argument);
 }
+
+TEST_CASE("buildResultsTable: a sequence's own rules decide its cells, the others keep the suite's") {
+  // A street sequence whose 6-frame RTE of 0.3 m is ordinary drift there; the paper's 10 cm elsewhere.
+  voca::TableRules street;
+  street.rte_divergence_m = 1.0;
+  const voca::ResultsTable t =
+      voca::buildResultsTable(systems({"A"}), {"room", "street"}, {{ok(0.05, 0.3)}, {ok(5.0, 0.3)}},
+                              std::vector<voca::TableRules>{voca::TableRules{}, street});
+  CHECK(t.cells[kRte][0][0].kind == CellKind::kDivergent);
+  CHECK(t.cells[kRte][1][0].kind == CellKind::kValue);
+  CHECK(t.cells[kRte][1][0].value == 0.3);
+  CHECK(t.cells[kAte][1][0].kind == CellKind::kValue);
+  CHECK_THROWS_AS(voca::buildResultsTable(systems({"A"}), {"room", "street"}, {{ok(0.05, 0.3)}, {ok(5.0, 0.3)}},
+                                          std::vector<voca::TableRules>{street}),
+                  std::invalid_argument);
+}

@@ -99,14 +99,18 @@ def write_suite(out, names, bitrates, kitti):
     if kitti is not None and kitti.is_dir():
         encoded = {rate: f"kitti06-{rate}" for rate in bitrates
                    if (out / f"kitti06-{rate}" / "mav0" / "cam1" / "data.mp4").exists()}
-        entry = {"name": "kitti06", "path": str(kitti.resolve()), "config": "kitti"}
+        # At 10 Hz and ~10 m/s, RTE's 6 frames span about 6 m: the paper's 10 cm bound (set for EuRoC's
+        # 0.3 s) would call ordinary drift divergence, so the street clip gets 1 m.
+        entry = {"name": "kitti06", "path": str(kitti.resolve()), "config": "kitti",
+                 "rules": {"rte_divergence_m": 1.0}}
         if encoded:
             entry["encoded"] = encoded
         sequences.append(entry)
     if not sequences:
         return 0
+    # Three runs per cell, from frames 0, 5 and 10: one run's error moves a lot with small input changes.
     suite = {"name": "eval_set", "sequences": sequences, "bitrates": ["raw"] + bitrates, "modes": SUITE_MODES,
-             "run_args": ["--threads", "1"]}
+             "repeats": 3, "run_args": ["--threads", "1"]}
     (out / "suite.json").write_text(json.dumps(suite, indent=2) + "\n")
     return len(sequences)
 

@@ -485,7 +485,18 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
 
   std::vector<fs::path> written;
   std::vector<std::string> sequences;
-  for (const SuiteSequence& s : suite.sequences) sequences.push_back(s.name);
+  std::vector<TableRules> rules;
+  std::string own_rules;  // the table note naming the sequences with bounds of their own
+  for (const SuiteSequence& s : suite.sequences) {
+    sequences.push_back(s.name);
+    rules.push_back(s.rules.value_or(suite.rules));
+    if (s.rules) {
+      own_rules += fmt::format("{}{} (ATE > {:g} m, RTE > {:g} cm, R at {:.0f}%)", own_rules.empty() ? "" : "; ", s.name,
+                               s.rules->ate_divergence_m, 100.0 * s.rules->rte_divergence_m,
+                               100.0 * s.rules->min_reset_free_fraction);
+    }
+  }
+  if (!own_rules.empty()) own_rules = "Sequences with bounds of their own: " + own_rules + ".\n";
   std::string summary_md = fmt::format("# {}: summary\n\n", suite.name);
   std::string starts;  // "0, 5, 10": the frames the repeats track from
   for (int r = 0; r < suite.repeats; ++r) {
@@ -521,11 +532,12 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
         row.push_back(it == results.end() ? std::nullopt : metricsOfRepeats(it->second, suite.repeats));
       }
     }
-    const ResultsTable table = buildResultsTable(systems, sequences, runs, suite.rules);
+    const ResultsTable table = buildResultsTable(systems, sequences, runs, rules);
     std::string title = bitrate == "raw" ? "raw images" : fmt::format("{}bit/s per camera", bitrate);
     if (suite.repeats > 1) title += fmt::format(", median of {} runs from frames {}", suite.repeats, starts);
     const fs::path base = out / "tables" / bitrate;
-    writeFile(base.string() + ".md", tableMarkdown(table, fmt::format("{}: {}", suite.name, title), suite.rules));
+    writeFile(base.string() + ".md",
+              tableMarkdown(table, fmt::format("{}: {}", suite.name, title), suite.rules) + own_rules);
     writeFile(base.string() + ".csv", tableCsv(table));
     writeFile(base.string() + ".tex", tableLatex(table, fmt::format("{}, {}.", suite.name, title), suite.rules));
     for (const char* ext : {".md", ".csv", ".tex"}) written.push_back(base.string() + ext);

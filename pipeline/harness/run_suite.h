@@ -13,8 +13,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "platform/process/child_process.h"
 #include "pipeline/harness/suite.h"
+#include "platform/process/child_process.h"
 
 namespace voca::harness {
 

@@ -35,6 +35,21 @@ std::string readName(const ConfigValue& value, const std::string& where) {
 template <class Config>
 using Reader = ConfigReader<Config>;
 
+// The thresholds' open bounds are checked after reading (ranges in the table are closed).
+const ConfigField<TableRules> kRulesFields[] = {
+    {"ate_divergence_m", &TableRules::ate_divergence_m},
+    {"rte_divergence_m", &TableRules::rte_divergence_m},
+    {"min_reset_free_fraction", &TableRules::min_reset_free_fraction},
+};
+
+void checkRules(const TableRules& rules, const std::string& where) {
+  if (!(rules.ate_divergence_m > 0.0)) fail(where + ".ate_divergence_m", "expected a positive number");
+  if (!(rules.rte_divergence_m > 0.0)) fail(where + ".rte_divergence_m", "expected a positive number");
+  if (!(rules.min_reset_free_fraction >= 0.0 && rules.min_reset_free_fraction < 1.0)) {
+    fail(where + ".min_reset_free_fraction", "expected 0 <= x < 1");
+  }
+}
+
 const ConfigField<SuiteSequence> kSequenceFields[] = {
     {"name", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
        s.name = readName(v, at);
@@ -61,6 +76,12 @@ const ConfigField<SuiteSequence> kSequenceFields[] = {
        }
      }}},
     {"optional", &SuiteSequence::optional},
+    {"rules", Reader<SuiteSequence>{[](SuiteSequence& s, const ConfigValue& v, const std::string& at) {
+       TableRules rules;
+       v.readSection<TableRules>(at, kRulesFields, rules);
+       checkRules(rules, at);
+       s.rules = rules;
+     }}},
 };
 
 // Checks what the table cannot: one of path and synth, no --out, files that must exist.
@@ -82,21 +103,6 @@ void checkSequence(const SuiteSequence& sequence, const std::string& where) {
   }
   if (sequence.ground_truth && !fs::exists(*sequence.ground_truth) && !sequence.optional) {
     fail(where + ".gt", fmt::format("{} does not exist", sequence.ground_truth->string()));
-  }
-}
-
-// The thresholds' open bounds are checked after reading (ranges in the table are closed).
-const ConfigField<TableRules> kRulesFields[] = {
-    {"ate_divergence_m", &TableRules::ate_divergence_m},
-    {"rte_divergence_m", &TableRules::rte_divergence_m},
-    {"min_reset_free_fraction", &TableRules::min_reset_free_fraction},
-};
-
-void checkRules(const TableRules& rules, const std::string& where) {
-  if (!(rules.ate_divergence_m > 0.0)) fail(where + ".ate_divergence_m", "expected a positive number");
-  if (!(rules.rte_divergence_m > 0.0)) fail(where + ".rte_divergence_m", "expected a positive number");
-  if (!(rules.min_reset_free_fraction >= 0.0 && rules.min_reset_free_fraction < 1.0)) {
-    fail(where + ".min_reset_free_fraction", "expected 0 <= x < 1");
   }
 }
 
@@ -236,6 +242,11 @@ json suiteToJson(const Suite& suite) {
     if (s.calibration) j["calib"] = fs::absolute(*s.calibration).string();
     if (s.ground_truth) j["gt"] = fs::absolute(*s.ground_truth).string();
     if (s.config) j["config"] = *s.config;
+    if (s.rules) {
+      j["rules"] = {{"ate_divergence_m", s.rules->ate_divergence_m},
+                    {"rte_divergence_m", s.rules->rte_divergence_m},
+                    {"min_reset_free_fraction", s.rules->min_reset_free_fraction}};
+    }
     for (const auto& [bitrate, folder] : s.encoded) j["encoded"][bitrate] = fs::absolute(folder).string();
     sequences.push_back(j);
   }

@@ -28,6 +28,9 @@ struct SuiteSequence {
   // Encodings made elsewhere (e.g. by tools/make_eval_set.py), by bitrate: used instead of encoding.
   std::map<std::string, std::filesystem::path> encoded;
   bool optional = false;  // skipped (with a note) when the folder is missing
+  // Failure bounds of its own instead of the suite's (keys left out take the paper's values), e.g. a
+  // wider RTE bound for a street sequence.
+  std::optional<TableRules> rules;
 };
 
 // A trajectory produced by another system (Basalt, ORB-SLAM3 ...) on one sequence at one bitrate,

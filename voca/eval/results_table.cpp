@@ -89,8 +89,18 @@ void rankRow(std::vector<TableCell*> row) {
 ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std::string> sequences,
                                const std::vector<std::vector<std::optional<RunMetrics>>>& runs,
                                const TableRules& rules) {
+  const std::size_t count = sequences.size();
+  return buildResultsTable(std::move(systems), std::move(sequences), runs, std::vector<TableRules>(count, rules));
+}
+
+ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std::string> sequences,
+                               const std::vector<std::vector<std::optional<RunMetrics>>>& runs,
+                               const std::vector<TableRules>& rules_per_sequence) {
   if (runs.size() != sequences.size()) {
     throw std::invalid_argument("buildResultsTable: one row of runs per sequence expected");
+  }
+  if (rules_per_sequence.size() != sequences.size()) {
+    throw std::invalid_argument("buildResultsTable: one set of rules per sequence expected");
   }
   for (const auto& row : runs) {
     if (row.size() != systems.size()) throw std::invalid_argument("buildResultsTable: one run per system expected");
@@ -106,7 +116,7 @@ ResultsTable buildResultsTable(std::vector<TableSystem> systems, std::vector<std
     cells.assign(num_sequences, std::vector<TableCell>(num_systems));
     for (std::size_t q = 0; q < num_sequences; ++q) {
       for (std::size_t s = 0; s < num_systems; ++s) {
-        cells[q][s] = classifyRun(runs[q][s], static_cast<TableMetric>(m), rules);
+        cells[q][s] = classifyRun(runs[q][s], static_cast<TableMetric>(m), rules_per_sequence[q]);
         if (isFailure(cells[q][s].kind) && table.systems[s].counts_for_avg[m]) table.greyed[q] = true;
       }
     }
