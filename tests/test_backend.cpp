@@ -362,6 +362,40 @@ TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping i
   CHECK(max_diff_deg < 1e-3);
 }
 
+TEST_CASE("backend: a marginalised keyframe takes its landmarks along unless rehost_landmarks keeps the tracked ones" *
+          doctest::test_suite("long")) {
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.5;
+  sc.seed = 9;
+  sc.duration_s = 6.0;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  BackendConfig marginalise_config, rehost_config;
+  rehost_config.rehost_landmarks = true;
+  CHECK_FALSE(marginalise_config.rehost_landmarks);  // Basalt's behaviour is the default
+  VoEstimator marginalise(marginalise_config, rig), rehost(rehost_config, rig);
+  std::size_t frames = 0;
+  // Up to the first marginalisation the two are the same estimator.
+  while (marginalise.numKeyframes() < marginalise_config.max_keyframes && frames < seq.frames.size()) {
+    REQUIRE(marginalise.process(seq.frames[frames]).state == TrackingState::kTracking);
+    REQUIRE(rehost.process(seq.frames[frames]).state == TrackingState::kTracking);
+    ++frames;
+  }
+  REQUIRE(marginalise.numKeyframes() == marginalise_config.max_keyframes);
+  REQUIRE(marginalise.numLandmarks() == rehost.numLandmarks());
+  const int landmarks = marginalise.numLandmarks();
+  REQUIRE(marginalise.marginalizeOldestKeyframe());
+  REQUIRE(rehost.marginalizeOldestKeyframe());
+  const int lost_marginalising = landmarks - marginalise.numLandmarks();
+  const int lost_rehosting = landmarks - rehost.numLandmarks();
+  MESSAGE("landmarks leaving with the oldest keyframe: " << lost_marginalising << " marginalised, " << lost_rehosting
+                                                         << " when re-hosting");
+  // The oldest keyframe hosts landmarks the newest frame still tracks: marginalising takes them along
+  // (their information goes into the prior), re-hosting keeps them in the window.
+  CHECK(lost_marginalising > lost_rehosting);
+  CHECK(lost_rehosting >= 0);
+}
+
 TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory stays continuous and finite" *
           doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();

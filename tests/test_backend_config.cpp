@@ -28,6 +28,7 @@ TEST_CASE("backend config: defaults are the paper's EuRoC values (Basalt config.
   CHECK(c.min_frames_after_kf == 1);
   CHECK(c.new_kf_keypoints_thresh == 0.8);
   CHECK(c.kf_marg_feature_ratio == 0.2);
+  CHECK_FALSE(c.rehost_landmarks);  // landmarks leave with their host keyframe, as in Basalt
   CHECK(c.obs_std_dev_px == 0.5);
   CHECK(c.obs_huber_thresh_px == 1.0);
   CHECK(c.min_triangulation_dist_m == 0.05);
@@ -50,6 +51,11 @@ TEST_CASE("backend config: shipped files parse, TUM-VI uses Gauss-Newton as the 
   const VocaConfig tumvi = loadConfig(root + "/configs/tumvi_vo.json");
   CHECK_FALSE(tumvi.backend.use_lm);
   CHECK(tumvi.backend.lm_lambda_initial == 1e-7);
+  // Marginalising tracked landmarks with their host won on the EuRoC and TUM-VI motions, re-hosting
+  // them on the KITTI clip (configs/README.md).
+  CHECK_FALSE(euroc.backend.rehost_landmarks);
+  CHECK_FALSE(tumvi.backend.rehost_landmarks);
+  CHECK(loadConfig(root + "/configs/kitti_vo.json").backend.rehost_landmarks);
 }
 
 TEST_CASE("backend config: bad sections name the key and what was expected") {

@@ -16,6 +16,7 @@ const Field kFields[] = {
     {"min_frames_after_kf", &BackendConfig::min_frames_after_kf, 0, 1000},
     {"new_kf_keypoints_thresh", &BackendConfig::new_kf_keypoints_thresh, 0.0, 1.0},
     {"kf_marg_feature_ratio", &BackendConfig::kf_marg_feature_ratio, 0.0, 1.0},
+    {"rehost_landmarks", &BackendConfig::rehost_landmarks},
     {"obs_std_dev_px", &BackendConfig::obs_std_dev_px, 1e-3, 100.0},
     {"obs_huber_thresh_px", &BackendConfig::obs_huber_thresh_px, 1e-3, 1000.0},
     {"outlier_threshold_px", &BackendConfig::outlier_threshold_px, 1e-3, 1000.0},

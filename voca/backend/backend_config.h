@@ -16,6 +16,11 @@ struct BackendConfig {
   int min_frames_after_kf = 1;           // vio_min_frames_after_kf
   double new_kf_keypoints_thresh = 0.8;  // vio_new_kf_keypoints_thresh: keyframe when connected / tracked < this
   double kf_marg_feature_ratio = 0.2;    // vio_kf_marg_feature_ratio: marginalise a keyframe whose landmarks are lost
+  // Landmarks hosted in a marginalised keyframe that the newest frame still tracks: false
+  // marginalises them with their host, as Basalt does; true moves them to another keyframe, which
+  // keeps them alive but drops their views in the marginalised frame (a pose-only prior cannot hold
+  // them), and the window then shifts on the next frame.
+  bool rehost_landmarks = false;
   // Residuals.
   double obs_std_dev_px = 0.5;        // vio_obs_std_dev
   double obs_huber_thresh_px = 1.0;   // vio_obs_huber_thresh

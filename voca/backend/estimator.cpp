@@ -207,9 +207,9 @@ int VoEstimator::chooseKeyframeToMarginalize(int newest) const {
 
 void VoEstimator::prepareMarginalization(int frame) {
   WindowFrame& fm = window_[frame];
-  // Landmarks hosted here that the newest frame still tracks move to another keyframe that sees
-  // them, in its left camera if one does (kept alive, where Basalt loses them); the others are marginalised with
-  // the frame, so their information on the window stays in the prior.
+  // Landmarks hosted here are marginalised with the frame, so their information on the window stays
+  // in the prior. With rehost_landmarks, those the newest frame still tracks move instead to another
+  // keyframe that sees them, in its left camera if one does (kept alive, but their views here are lost).
   const int newest = window_.newest();
   const std::uint32_t newest_bits = frameBits(newest);
   scratch_landmarks_.clear();
@@ -217,7 +217,7 @@ void VoEstimator::prepareMarginalization(int frame) {
     const int i = landmarks_.alive()[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[i];
     if (!lm.alive || lm.host != frame) continue;
-    if (newest == frame || (lm.mask & newest_bits) == 0) {
+    if (!config_.rehost_landmarks || newest == frame || (lm.mask & newest_bits) == 0) {
       scratch_landmarks_.push_back(i);
       continue;
     }
