@@ -69,7 +69,7 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(empty.frontend.prior_max_qp == 0);  // the QP check is off unless asked for
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_max_qp": 51}})"), "x").frontend.prior_max_qp == 51);
   CHECK_FALSE(empty.frontend.skip_coarse_outside);  // Basalt's alignment unless asked for
-  CHECK(tumvi.frontend.skip_coarse_outside);  // measured better on the fisheye (configs/README.md)
+  CHECK(tumvi.frontend.skip_coarse_outside);        // measured better on the fisheye (configs/README.md)
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"skip_coarse_outside": true}})"), "x")
             .frontend.skip_coarse_outside);
 }

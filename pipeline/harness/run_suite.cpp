@@ -491,8 +491,8 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
     sequences.push_back(s.name);
     rules.push_back(s.rules.value_or(suite.rules));
     if (s.rules) {
-      own_rules += fmt::format("{}{} (ATE > {:g} m, RTE > {:g} cm, R at {:.0f}%)", own_rules.empty() ? "" : "; ", s.name,
-                               s.rules->ate_divergence_m, 100.0 * s.rules->rte_divergence_m,
+      own_rules += fmt::format("{}{} (ATE > {:g} m, RTE > {:g} cm, R at {:.0f}%)", own_rules.empty() ? "" : "; ",
+                               s.name, s.rules->ate_divergence_m, 100.0 * s.rules->rte_divergence_m,
                                100.0 * s.rules->min_reset_free_fraction);
     }
   }
