@@ -82,6 +82,15 @@ SyntheticObservations shortNoiseFreeSequence(const StereoRig& rig) {
   return makeSyntheticObservations(rig, sc);
 }
 
+// 6 s of observations with 0.5 px noise: enough keyframes for the window to marginalise.
+SyntheticObservations marginalisationSequence(const StereoRig& rig) {
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.5;
+  sc.seed = 9;
+  sc.duration_s = 6.0;
+  return makeSyntheticObservations(rig, sc);
+}
+
 }  // namespace
 
 TEST_CASE("backend: stereographic bearing round trip and Jacobian") {
@@ -314,11 +323,7 @@ TEST_CASE("backend: 0.5 px noise on a gentle trajectory keeps RTE (6 frames) bel
 TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping it (information moved, not lost)" *
           doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
-  SyntheticObservationsConfig sc;
-  sc.noise_px = 0.5;
-  sc.seed = 9;
-  sc.duration_s = 6.0;
-  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  const SyntheticObservations seq = marginalisationSequence(rig);
   // Two identical estimators (the estimator is deterministic). Plain least squares: with Huber
   // weights the prior keeps the weights of its linearisation point by design, which is not what
   // this test is about.
@@ -365,11 +370,7 @@ TEST_CASE("backend: marginalising a keyframe gives the same optimum as keeping i
 TEST_CASE("backend: a marginalised keyframe takes its landmarks along unless rehost_landmarks keeps the tracked ones" *
           doctest::test_suite("long")) {
   const StereoRig rig = synth::eurocRig();
-  SyntheticObservationsConfig sc;
-  sc.noise_px = 0.5;
-  sc.seed = 9;
-  sc.duration_s = 6.0;
-  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  const SyntheticObservations seq = marginalisationSequence(rig);
   BackendConfig marginalise_config, rehost_config;
   rehost_config.rehost_landmarks = true;
   CHECK_FALSE(marginalise_config.rehost_landmarks);  // Basalt's behaviour is the default

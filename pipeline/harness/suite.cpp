@@ -42,6 +42,13 @@ const ConfigField<TableRules> kRulesFields[] = {
     {"min_reset_free_fraction", &TableRules::min_reset_free_fraction},
 };
 
+// The rules as the suite file writes them (the keys of kRulesFields).
+json rulesToJson(const TableRules& rules) {
+  return {{"ate_divergence_m", rules.ate_divergence_m},
+          {"rte_divergence_m", rules.rte_divergence_m},
+          {"min_reset_free_fraction", rules.min_reset_free_fraction}};
+}
+
 void checkRules(const TableRules& rules, const std::string& where) {
   if (!(rules.ate_divergence_m > 0.0)) fail(where + ".ate_divergence_m", "expected a positive number");
   if (!(rules.rte_divergence_m > 0.0)) fail(where + ".rte_divergence_m", "expected a positive number");
@@ -242,11 +249,7 @@ json suiteToJson(const Suite& suite) {
     if (s.calibration) j["calib"] = fs::absolute(*s.calibration).string();
     if (s.ground_truth) j["gt"] = fs::absolute(*s.ground_truth).string();
     if (s.config) j["config"] = *s.config;
-    if (s.rules) {
-      j["rules"] = {{"ate_divergence_m", s.rules->ate_divergence_m},
-                    {"rte_divergence_m", s.rules->rte_divergence_m},
-                    {"min_reset_free_fraction", s.rules->min_reset_free_fraction}};
-    }
+    if (s.rules) j["rules"] = rulesToJson(*s.rules);
     for (const auto& [bitrate, folder] : s.encoded) j["encoded"][bitrate] = fs::absolute(folder).string();
     sequences.push_back(j);
   }
@@ -271,10 +274,7 @@ json suiteToJson(const Suite& suite) {
             {"repeat_step_frames", suite.repeat_step_frames},
             {"encode_fps", suite.encode_fps},
             {"decoded_png", suite.decoded_png},
-            {"rules",
-             {{"ate_divergence_m", suite.rules.ate_divergence_m},
-              {"rte_divergence_m", suite.rules.rte_divergence_m},
-              {"min_reset_free_fraction", suite.rules.min_reset_free_fraction}}},
+            {"rules", rulesToJson(suite.rules)},
             {"external", external}};
   if (configs != std::vector<std::string>{""}) j["configs"] = configs;
   if (!suite.run_args.empty()) j["run_args"] = suite.run_args;
