@@ -98,10 +98,9 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
   // d n_i = (d v_i - n_i * mean_j(d v_j)) / mean.
   patch_kernels::normaliseTemplate<simd4::Native>(n, inv_mean, jsum, value.data(), jpix, jac.data());
   if (jacobian != nullptr) *jacobian = jac;
-  // H = J^T J from six float dot products over contiguous arrays.
+  // H = J^T J, its six distinct entries in one pass over the Jacobian rows.
   float h[3][3];
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) h[a][b] = h[b][a] = patch_kernels::dot<simd4::Native>(jac[a].data(), jac[b].data(), n);
+  patch_kernels::gram3<simd4::Native>(jac.data(), n, h);
   Eigen::Matrix3d hessian;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) hessian(a, b) = h[a][b];
