@@ -12,6 +12,7 @@
 
 #include "voca/frontend/patch.h"
 #include "voca/frontend/patch_kernels.h"
+#include "voca/frontend/patch_kernels_avx2.h"
 #include "voca/frontend/pyramid_kernels.h"
 #include "voca/frontend/simd4.h"
 
@@ -168,6 +169,53 @@ TEST_CASE("patch kernels: warped sampling and fused dot products, native == port
                      n_sum));
     }
   }
+}
+
+TEST_CASE("patch kernels: the AVX2 warped sampling equals the portable kernel bit for bit") {
+#if VOCA_AVX2_KERNELS
+  if (!kernels::avx2Available()) {
+    MESSAGE("this CPU has no AVX2: the AVX2 kernel is not run (the tracker uses sampleWarped<Native>)");
+    return;
+  }
+  // Rotations up to 0.8 rad put the eight lanes of a step on different rows and cells; 24 points
+  // leave no tail group, 52 one group of four.
+  const FloatImage image = randomImage(120, 90, 31);
+  const FloatView view = image.view();
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<float> pos(15.f, 70.f), angle(-0.8f, 0.8f), weight(-2.f, 2.f);
+  std::array<float, PatchPattern::kMaxSize> step[3];
+  for (auto& row : step)
+    for (float& w : row) w = weight(rng);
+  int compared = 0;
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    const int n = pattern->size;
+    for (int trial = 0; trial < 200; ++trial) {
+      const float theta = trial % 4 == 0 ? 0.f : angle(rng), c = std::cos(theta), s = std::sin(theta);
+      const float tx = pos(rng), ty = pos(rng);
+      std::array<float, PatchPattern::kMaxSize> a_out{}, p_out{};
+      float a_dots[3], p_dots[3];
+      const float a_sum =
+          kernels::sampleWarpedAvx2(view.data, view.stride, *pattern, n, c, s, tx, ty, a_out.data(), step, a_dots);
+      const float p_sum = kernels::sampleWarped<simd4::Portable>(view.data, view.stride, *pattern, n, c, s, tx, ty,
+                                                                 p_out.data(), step, p_dots);
+      CHECK(sameBits(a_sum, p_sum));
+      for (int r = 0; r < 3; ++r) CHECK(sameBits(a_dots[r], p_dots[r]));
+      for (int i = 0; i < n; ++i)
+        CHECK(sameBits(a_out[static_cast<std::size_t>(i)], p_out[static_cast<std::size_t>(i)]));
+      // The two uses in the tracker: samples only, and dot products only.
+      CHECK(sameBits(
+          kernels::sampleWarpedAvx2(view.data, view.stride, *pattern, n, c, s, tx, ty, nullptr, step, a_dots), p_sum));
+      for (int r = 0; r < 3; ++r) CHECK(sameBits(a_dots[r], p_dots[r]));
+      CHECK(sameBits(
+          kernels::sampleWarpedAvx2(view.data, view.stride, *pattern, n, c, s, tx, ty, nullptr, nullptr, nullptr),
+          p_sum));
+      ++compared;
+    }
+  }
+  CHECK(compared == 400);
+#else
+  CHECK_FALSE(kernels::avx2Available());
+#endif
 }
 
 TEST_CASE("patch kernels: masked template sampling, native == portable == per-point sampleWithGradient") {

@@ -19,6 +19,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
+#include "voca/frontend/patch_kernels_avx2.h"
 #include "voca/frontend/simd4.h"
 
 namespace voca::cli {
@@ -79,7 +80,9 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
   fmt::print(
       "machine: {} ({} hardware threads, KLT kernels: {}); frontend on one thread, thread CPU time per "
       "stereo frame\n",
-      platform::cpuModel(), std::thread::hardware_concurrency(), simd4::Native::kName);
+      platform::cpuModel(), std::thread::hardware_concurrency(),
+      patch_kernels::avx2Available() ? fmt::format("{}, warped sampling avx2", simd4::Native::kName)
+                                     : std::string(simd4::Native::kName));
   fmt::print("{:<16} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}  {}\n", "mode", "median ms", "p99 ms", "mean ms", "wall p50",
              "left pts", "right pts", fmt::format("target (<= {} ms)", kTargetMedianMs));
   for (PriorMode mode : modes) {

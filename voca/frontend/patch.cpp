@@ -1,6 +1,7 @@
 #include "voca/frontend/patch.h"
 
 #include "voca/frontend/patch_kernels.h"
+#include "voca/frontend/patch_kernels_avx2.h"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -41,6 +42,17 @@ float sumInPointOrder(const std::array<float, PatchPattern::kMaxSize>& values, s
     if (((sampled >> i) & 1u) != 0) sum += values[static_cast<std::size_t>(i)];
   }
   return sum;
+}
+
+// patch_kernels::sampleWarped in the fastest variant this CPU runs; every variant gives the same bits.
+float sampleWarpedFastest(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c,
+                          float s, float tx, float ty, float* out,
+                          const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
+#if VOCA_AVX2_KERNELS
+  static const bool use_avx2 = patch_kernels::avx2Available();
+  if (use_avx2) return patch_kernels::sampleWarpedAvx2(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
+#endif
+  return patch_kernels::sampleWarped<simd4::Native>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
 }
 
 }  // namespace
@@ -132,8 +144,7 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
   int count = 0;
   if (tmpl.all_points_valid && squareInside(target, tx, ty, pattern.max_norm)) {
     // Fast path, every point valid on both sides: no per-point tests.
-    sum = patch_kernels::sampleWarped<simd4::Native>(target.data, target.stride, pattern, n, c, s, tx, ty,
-                                                     residual.data(), nullptr, nullptr);
+    sum = sampleWarpedFastest(target.data, target.stride, pattern, n, c, s, tx, ty, residual.data(), nullptr, nullptr);
     count = n;
     if (!(sum > 1e-3f * static_cast<float>(count))) return 0;
     const float inv_mean = static_cast<float>(count) / sum;
@@ -171,9 +182,8 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
       // Every point inside: one pass samples the target and forms H^-1 J^T r directly, as
       // sum_i step_i (I_i / mean - value_i) = (sum_i step_i I_i) / mean - sum_i step_i value_i.
       float dots[3];
-      const float sum =
-          patch_kernels::sampleWarped<simd4::Native>(target.data, target.stride, pattern, n, T.unitComplex().x(),
-                                                     T.unitComplex().y(), tx, ty, nullptr, tmpl.step, dots);
+      const float sum = sampleWarpedFastest(target.data, target.stride, pattern, n, T.unitComplex().x(),
+                                            T.unitComplex().y(), tx, ty, nullptr, tmpl.step, dots);
       if (!(sum > 1e-3f * static_cast<float>(n))) return AlignStatus::kTooFewPoints;
       const float inv_mean = static_cast<float>(n) / sum;
       for (int r = 0; r < 3; ++r) inc[r] = inv_mean * dots[r] - tmpl.step_dot_value[r];
