@@ -218,6 +218,47 @@ TEST_CASE("patch kernels: the AVX2 warped sampling equals the portable kernel bi
 #endif
 }
 
+TEST_CASE("patch kernels: the AVX2 template sampling equals the portable kernel bit for bit") {
+#if VOCA_AVX2_KERNELS
+  if (!kernels::avx2Available()) {
+    MESSAGE("this CPU has no AVX2: the AVX2 kernel is not run (the tracker uses sampleTemplate<Native>)");
+    return;
+  }
+  const FloatImage image = randomImage(96, 80, 41);
+  const FloatView view = image.view();
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<float> pos(10.f, 70.f);
+  int compared = 0;
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    for (int trial = 0; trial < 200; ++trial) {
+      // Every fourth centre on integer pixels: the weights are then 0 and 1.
+      const Eigen::Vector2f centre = trial % 4 == 0 ? Eigen::Vector2f(std::floor(pos(rng)), std::floor(pos(rng)))
+                                                    : Eigen::Vector2f(pos(rng), pos(rng));
+      const int ix = static_cast<int>(centre.x()), iy = static_cast<int>(centre.y());
+      const float fx = centre.x() - static_cast<float>(ix), fy = centre.y() - static_cast<float>(iy);
+      const float* base = &view(ix, iy);
+      std::array<float, PatchPattern::kMaxSize> av, atx, aty, ath, pv, ptx, pty, pth;
+      const float a_sum = kernels::sampleTemplateAvx2(base, view.stride, *pattern, fx, fy, av.data(), atx.data(),
+                                                      aty.data(), ath.data());
+      const float p_sum = kernels::sampleTemplate<simd4::Portable>(base, view.stride, *pattern, fx, fy, pv.data(),
+                                                                   ptx.data(), pty.data(), pth.data());
+      CHECK(sameBits(a_sum, p_sum));
+      for (int i = 0; i < pattern->size; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        CHECK(sameBits(av[k], pv[k]));
+        CHECK(sameBits(atx[k], ptx[k]));
+        CHECK(sameBits(aty[k], pty[k]));
+        CHECK(sameBits(ath[k], pth[k]));
+      }
+      ++compared;
+    }
+  }
+  CHECK(compared == 400);
+#else
+  CHECK_FALSE(kernels::avx2Available());
+#endif
+}
+
 TEST_CASE("patch kernels: masked template sampling, native == portable == per-point sampleWithGradient") {
   // Centres from outside the image to past its far border, so patches are cut by every edge.
   const FloatImage image = randomImage(64, 48, 21);

@@ -55,6 +55,16 @@ float sampleWarpedFastest(const float* data, std::ptrdiff_t stride, const PatchP
   return patch_kernels::sampleWarped<simd4::Native>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
 }
 
+// patch_kernels::sampleTemplate in the fastest variant this CPU runs; every variant gives the same bits.
+float sampleTemplateFastest(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
+                            float* value, float* d_tx, float* d_ty, float* d_theta) {
+#if VOCA_AVX2_KERNELS
+  static const bool use_avx2 = patch_kernels::avx2Available();
+  if (use_avx2) return patch_kernels::sampleTemplateAvx2(base, stride, pattern, fx, fy, value, d_tx, d_ty, d_theta);
+#endif
+  return patch_kernels::sampleTemplate<simd4::Native>(base, stride, pattern, fx, fy, value, d_tx, d_ty, d_theta);
+}
+
 }  // namespace
 
 const PatchPattern& pattern24() {
@@ -88,9 +98,9 @@ void PatchTemplate::build(const FloatView& image, const Eigen::Vector2f& center,
     // bilinear weights and only the base pointer moves.
     const int ix = static_cast<int>(center.x()), iy = static_cast<int>(center.y());
     const float* base = image.data + static_cast<std::ptrdiff_t>(iy) * image.stride + ix;
-    sum = patch_kernels::sampleTemplate<simd4::Native>(base, image.stride, pattern, center.x() - static_cast<float>(ix),
-                                                       center.y() - static_cast<float>(iy), value.data(),
-                                                       jpix[0].data(), jpix[1].data(), jpix[2].data());
+    sum = sampleTemplateFastest(base, image.stride, pattern, center.x() - static_cast<float>(ix),
+                                center.y() - static_cast<float>(iy), value.data(), jpix[0].data(), jpix[1].data(),
+                                jpix[2].data());
     count = n;
   } else {
     // Near the border every point gets its own weights and its own test.

@@ -22,11 +22,12 @@ bool avx2Available() {
 
 namespace {
 
-// (p[0], p[1]) of each of the eight pointers at data + offset[k], as two eight-lane vectors.
-[[gnu::target("avx2"), gnu::always_inline]] inline void gatherPairs8(const float* data, const std::int32_t* offset,
-                                                                     __m256& first, __m256& second) {
+// (p[k][0], p[k][1]) of eight pointers as two eight-lane vectors: first lane k = p[k][0], second
+// lane k = p[k][1].
+[[gnu::target("avx2"), gnu::always_inline]] inline void gatherPairs8(const float* const p[8], __m256& first,
+                                                                     __m256& second) {
   __m128 pair[8];
-  for (int k = 0; k < 8; ++k) pair[k] = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(data + offset[k])));
+  for (int k = 0; k < 8; ++k) pair[k] = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p[k])));
   // Lanes 0-3 of the result come from points 0-3, lanes 4-7 from points 4-7.
   const __m256 points01 = _mm256_set_m128(_mm_movelh_ps(pair[4], pair[5]), _mm_movelh_ps(pair[0], pair[1]));
   const __m256 points23 = _mm256_set_m128(_mm_movelh_ps(pair[6], pair[7]), _mm_movelh_ps(pair[2], pair[3]));
@@ -39,7 +40,88 @@ namespace {
   return _mm_add_ps(_mm_add_ps(acc, _mm256_castps256_ps128(v)), _mm256_extractf128_ps(v, 1));
 }
 
+// Elements 0..3 of the eight rows at row[k], transposed: out[j] lane k = row[k][j] (each 128-bit
+// half of the registers is one SSE2 transpose: lanes 0-3 rows 0-3, lanes 4-7 rows 4-7).
+[[gnu::target("avx2"), gnu::always_inline]] inline void gatherRows8(const float* const row[8], __m256 out[4]) {
+  __m256 r[4];
+  for (int k = 0; k < 4; ++k) r[k] = _mm256_set_m128(_mm_loadu_ps(row[k + 4]), _mm_loadu_ps(row[k]));
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpacklo_ps(r[2], r[3]);
+  const __m256 t2 = _mm256_unpackhi_ps(r[0], r[1]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  out[0] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+  out[1] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+  out[2] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  out[3] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
 }  // namespace
+
+// The operations of sampleTemplate<Sse2> (valueAndGradient, thetaDerivative) on eight lanes, in the same order.
+[[gnu::target("avx2")]] float sampleTemplateAvx2(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern,
+                                                 float fx, float fy, float* value, float* d_tx, float* d_ty,
+                                                 float* d_theta) {
+  using V = simd4::Sse2;
+  const float w00_s = (1.f - fx) * (1.f - fy), w10_s = fx * (1.f - fy);
+  const float w01_s = (1.f - fx) * fy, w11_s = fx * fy;
+  const __m256 w00 = _mm256_set1_ps(w00_s), w10 = _mm256_set1_ps(w10_s);
+  const __m256 w01 = _mm256_set1_ps(w01_s), w11 = _mm256_set1_ps(w11_s);
+  const __m256 half = _mm256_set1_ps(0.5f);
+  __m128 total = _mm_setzero_ps();
+  int i = 0;
+  for (; i + 8 <= pattern.size; i += 8) {
+    const float* row0[8];  // top-left pixel of each point's bilinear cell
+    for (int k = 0; k < 8; ++k) {
+      const auto j = static_cast<std::size_t>(i + k);
+      row0[k] = base + static_cast<std::ptrdiff_t>(pattern.y[j]) * stride + static_cast<std::ptrdiff_t>(pattern.x[j]);
+    }
+    const float* from[8];
+    __m256 a[4], b[4];  // a[j] = row0[j - 1], b[j] = row1[j - 1], j = 0..3
+    for (int k = 0; k < 8; ++k) from[k] = row0[k] - 1;
+    gatherRows8(from, a);
+    for (int k = 0; k < 8; ++k) from[k] = row0[k] + stride - 1;
+    gatherRows8(from, b);
+    __m256 above0, above1, below0, below1;  // row0[-stride], row0[1 - stride], row1[stride], row1[stride + 1]
+    for (int k = 0; k < 8; ++k) from[k] = row0[k] - stride;
+    gatherPairs8(from, above0, above1);
+    for (int k = 0; k < 8; ++k) from[k] = row0[k] + 2 * stride;
+    gatherPairs8(from, below0, below1);
+    const __m256 v = _mm256_add_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, a[1]), _mm256_mul_ps(w10, a[2])), _mm256_mul_ps(w01, b[1])),
+        _mm256_mul_ps(w11, b[2]));
+    const __m256 gx =
+        _mm256_mul_ps(half, _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, _mm256_sub_ps(a[2], a[0])),
+                                                                      _mm256_mul_ps(w10, _mm256_sub_ps(a[3], a[1]))),
+                                                        _mm256_mul_ps(w01, _mm256_sub_ps(b[2], b[0]))),
+                                          _mm256_mul_ps(w11, _mm256_sub_ps(b[3], b[1]))));
+    const __m256 gy =
+        _mm256_mul_ps(half, _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, _mm256_sub_ps(b[1], above0)),
+                                                                      _mm256_mul_ps(w10, _mm256_sub_ps(b[2], above1))),
+                                                        _mm256_mul_ps(w01, _mm256_sub_ps(below0, a[1]))),
+                                          _mm256_mul_ps(w11, _mm256_sub_ps(below1, a[2]))));
+    const __m256 qx = _mm256_loadu_ps(pattern.x.data() + i), qy = _mm256_loadu_ps(pattern.y.data() + i);
+    _mm256_storeu_ps(value + i, v);
+    _mm256_storeu_ps(d_tx + i, gx);
+    _mm256_storeu_ps(d_ty + i, gy);
+    _mm256_storeu_ps(d_theta + i, _mm256_sub_ps(_mm256_mul_ps(gy, qx), _mm256_mul_ps(gx, qy)));
+    total = addHalves(total, v);
+  }
+  // A last group of four as sampleTemplate<Sse2> does it.
+  for (; i < pattern.size; i += 4) {
+    const float* row0[4];
+    for (int k = 0; k < 4; ++k) {
+      const auto j = static_cast<std::size_t>(i + k);
+      row0[k] = base + static_cast<std::ptrdiff_t>(pattern.y[j]) * stride + static_cast<std::ptrdiff_t>(pattern.x[j]);
+    }
+    __m128 v, gx, gy;
+    valueAndGradient<V>(row0, stride, V::set1(w00_s), V::set1(w10_s), V::set1(w01_s), V::set1(w11_s), v, gx, gy);
+    const __m128 qx = V::load(pattern.x.data() + i), qy = V::load(pattern.y.data() + i);
+    V::store(value + i, v);
+    V::store(d_tx + i, gx);
+    V::store(d_ty + i, gy);
+    V::store(d_theta + i, thetaDerivative<V>(gx, gy, qx, qy));
+    total = V::add(total, v);
+  }
+  return V::sum(total);
+}
 
 // The operations of sampleWarped<Sse2> (warpPoints, cellOffsets, bilinear) on eight lanes, in the same order.
 [[gnu::target("avx2")]] float sampleWarpedAvx2(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern,
@@ -60,8 +142,11 @@ namespace {
     _mm256_store_si256(reinterpret_cast<__m256i*>(offset),
                        _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(iy, vstride), ix)));
     __m256 top_left, top_right, bottom_left, bottom_right;
-    gatherPairs8(data, offset, top_left, top_right);
-    gatherPairs8(data + stride, offset, bottom_left, bottom_right);
+    const float* cell[8];
+    for (int k = 0; k < 8; ++k) cell[k] = data + offset[k];
+    gatherPairs8(cell, top_left, top_right);
+    for (auto& p : cell) p += stride;
+    gatherPairs8(cell, bottom_left, bottom_right);
     const __m256 top = _mm256_add_ps(top_left, _mm256_mul_ps(fx, _mm256_sub_ps(top_right, top_left)));
     const __m256 bottom = _mm256_add_ps(bottom_left, _mm256_mul_ps(fx, _mm256_sub_ps(bottom_right, bottom_left)));
     const __m256 v = _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bottom, top)));

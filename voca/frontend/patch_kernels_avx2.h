@@ -1,6 +1,6 @@
 #pragma once
-// An AVX2 variant of the KLT's hottest loop (patch_kernels::sampleWarped: about 40 % of the
-// frontend's time), eight pattern points per step, chosen at run time on x86-64 CPUs that have AVX2
+// AVX2 variants of the KLT's hottest loops (patch_kernels::sampleWarped, about 40 % of the
+// frontend's time, and sampleTemplate), eight pattern points per step, chosen at run time on x86-64 CPUs that have AVX2
 // while the rest of the build stays at the SSE2 baseline. It keeps the four-lane accumulators and
 // adds each half of an eight-lane step to them in point order, so its results equal the SSE2, NEON
 // and portable kernels' bit for bit (tests/test_patch_kernels.cpp).
@@ -22,11 +22,13 @@ namespace voca::patch_kernels {
 bool avx2Available();
 
 #if VOCA_AVX2_KERNELS
-// sampleWarped<V> (patch_kernels.h), same arguments and the same results bit for bit. Only to be
-// called when avx2Available().
+// sampleWarped<V> and sampleTemplate<V> (patch_kernels.h), same arguments and the same results bit
+// for bit. Only to be called when avx2Available().
 float sampleWarpedAvx2(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c, float s,
                        float tx, float ty, float* out, const std::array<float, PatchPattern::kMaxSize>* step,
                        float* dots);
+float sampleTemplateAvx2(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
+                         float* value, float* d_tx, float* d_ty, float* d_theta);
 #endif
 
 }  // namespace voca::patch_kernels
