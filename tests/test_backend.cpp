@@ -174,6 +174,63 @@ TEST_CASE("backend: reprojection Jacobians match numerical ones for every camera
   CHECK(checked > 100);  // most random configurations project in every model
 }
 
+TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame residuals match the general model") {
+  // WindowOptimizer::linearize sums J_host^T W J_host per frame pair and maps it to the target's
+  // blocks with D (hostToTargetTransposed, timesHostToTarget); the landmark's own frame takes
+  // reprojectInHost. Both must agree with the full model.
+  std::mt19937 rng(13);
+  const StereoRig euroc = synth::eurocRig();
+  const StereoRig tumvi = synth::tumviRig();
+  int checked = 0;
+  for (const StereoRig* rig : {&euroc, &tumvi}) {
+    for (int cam = 0; cam < 2; ++cam) {
+      const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
+      const SE3d T_cam0_cam = cam == 0 ? SE3d() : rig->T_cam0_cam1();
+      for (int trial = 0; trial < 40; ++trial) {
+        const SE3d T_w_h = randomPose(rng, 1.0);
+        const SE3d T_w_t =
+            T_w_h * SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, -0.1, 0.1, 0.05, -0.08, 0.03).finished() *
+                              (0.5 + trial / 40.0));
+        std::normal_distribution<double> g(0.0, 0.2);
+        const Eigen::Vector2d s(g(rng), g(rng));
+        const double rho = 0.2 + 0.1 * (trial % 5);
+        Eigen::Vector2d uv;
+        ReprojectionJacobians J;
+        if (!reprojectLandmark(camera, T_w_h, T_w_t, T_cam0_cam, s, rho, uv, &J)) continue;
+        const Eigen::Vector3d dt = T_w_h.translation() - T_w_t.translation();
+        // Sums of products of O(1e3) entries: rounding ~1e-12 relative.
+        const double scale = std::max(1.0, J.d_host.norm() * J.d_host.norm());
+        CHECK((timesHostToTarget<2>(dt, J.d_host) - J.d_target).norm() <= 1e-12 * std::max(1.0, J.d_target.norm()));
+        const Eigen::Matrix<double, 6, 6> H_hh = J.d_host.transpose() * J.d_host;
+        const Eigen::Matrix<double, 6, 6> H_tt = J.d_target.transpose() * J.d_target;
+        const Eigen::Matrix<double, 6, 6> H_th = J.d_target.transpose() * J.d_host;
+        const Eigen::Matrix<double, 6, 6> DtH = hostToTargetTransposed<6>(dt, H_hh);
+        CHECK((DtH - H_th).norm() <= 1e-11 * scale);
+        CHECK((timesHostToTarget<6>(dt, DtH) - H_tt).norm() <= 1e-11 * scale);
+        const Eigen::Matrix<double, 6, 3> H_hl = J.d_host.transpose() * J.d_landmark;
+        const Eigen::Matrix<double, 6, 3> H_tl = J.d_target.transpose() * J.d_landmark;
+        CHECK((hostToTargetTransposed<3>(dt, H_hl) - H_tl).norm() <= 1e-11 * std::max(1.0, H_tl.norm()));
+
+        // The same landmark seen from its own frame: reprojectInHost against the full model with
+        // target = host, value and landmark Jacobian.
+        Eigen::Vector2d uv_full, uv_host;
+        ReprojectionJacobians J_full;
+        if (!reprojectLandmark(camera, T_w_h, T_w_h, T_cam0_cam, s, rho, uv_full, &J_full)) continue;
+        const PoseMatrices host(T_w_h), cam0_cam(T_cam0_cam);
+        const HostBearing bearing(host, s, true);
+        const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
+        Eigen::Matrix<double, 2, 3> d_landmark;
+        REQUIRE(reprojectInHost(camera, cam0_cam.R_inv, offset, cam == 0, bearing, rho, uv_host, &d_landmark));
+        // The full model rotates the bearing out of the host and back in: ~1e-15 relative in the point.
+        CHECK((uv_host - uv_full).norm() <= 1e-9);
+        CHECK((d_landmark - J_full.d_landmark).norm() <= 1e-8 * std::max(1.0, J_full.d_landmark.norm()));
+        ++checked;
+      }
+    }
+  }
+  CHECK(checked > 100);
+}
+
 TEST_CASE("backend: id map agrees with std::unordered_map under random inserts and erases") {
   IdSlotMap map(500);
   std::unordered_map<std::uint64_t, int> reference;

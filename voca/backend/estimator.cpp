@@ -123,15 +123,17 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
 int VoEstimator::removeFrameOutliers(int frame, double threshold_px) {
   int removed = 0;
   const std::uint32_t bits = frameBits(frame);
+  const backend::WindowPoses poses = model_.windowPoses(window_);
   for (int k = static_cast<int>(landmarks_.alive().size()) - 1; k >= 0; --k) {
     const int i = landmarks_.alive()[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[i];
     if (!lm.alive || (lm.mask & bits) == 0 || lm.host == frame) continue;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     for (int c = 0; c < 2; ++c) {
       const std::uint32_t bit = 1u << maskBit(frame, c);
       if ((lm.mask & bit) == 0) continue;
       Eigen::Vector2d r;
-      if (!model_.residual(window_, lm, frame, c, r, nullptr) || r.norm() > threshold_px) {
+      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr) || r.norm() > threshold_px) {
         lm.mask &= ~bit;
         ++removed;
       }
@@ -272,13 +274,15 @@ void VoEstimator::frameStats(int frame, PoseEstimate& out) const {
   double sum_sq = 0.0, depth = 0.0;
   int inliers = 0, depth_count = 0;
   const std::uint32_t bits = frameBits(frame);
+  const backend::WindowPoses poses = model_.windowPoses(window_);
   for (const int i : landmarks_.alive()) {
     const Landmark& lm = landmarks_[i];
     if (!lm.alive || (lm.mask & bits) == 0) continue;
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     for (int c = 0; c < 2; ++c) {
       if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
       Eigen::Vector2d r;
-      if (!model_.residual(window_, lm, frame, c, r, nullptr)) continue;
+      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr)) continue;
       sum_sq += r.squaredNorm();
       ++inliers;
     }

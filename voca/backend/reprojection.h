@@ -65,65 +65,125 @@ struct PoseMatrices {
 // landmark and pass over the residuals instead of once per residual; the same values either way.
 struct HostBearing {
   Eigen::Vector3d b;
-  Eigen::Matrix<double, 3, 2> d_b_d_s;  // set only with_jacobian
-  Eigen::Vector3d Rb_w;                 // host.R * b
+  Eigen::Matrix<double, 3, 2> d_b_d_s;   // set only with_jacobian
+  Eigen::Vector3d Rb_w;                  // host.R * b
+  Eigen::Matrix<double, 3, 2> d_Rb_d_s;  // host.R * d_b_d_s, set only with_jacobian
 
   HostBearing() = default;
   HostBearing(const PoseMatrices& host, const Eigen::Vector2d& s, bool with_jacobian) {
     b = stereographicUnproject(s, with_jacobian ? &d_b_d_s : nullptr);
     Rb_w = host.R * b;
+    if (with_jacobian) d_Rb_d_s.noalias() = host.R * d_b_d_s;
   }
 };
 
-// Projects the landmark (bearing from HostBearing and inverse distance rho in the host frame's cam0)
-// into camera `camera` of the target frame, whose pose in that frame's cam0 is cam0_cam. host and
-// target hold T_world_cam0 of the host and target frames; bearing must have been built from host
-// (with_jacobian when jacobians are asked for). Works in homogeneous coordinates scaled by rho, so a
-// point at infinity (rho = 0) is fine. Returns false when the camera model cannot project it.
-// Without pose_jacobians only jacobians->d_landmark is set (what a residual in the host frame needs).
-inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const HostBearing& bearing,
-                              const PoseMatrices& target, const PoseMatrices& cam0_cam, double rho, Eigen::Vector2d& uv,
-                              ReprojectionJacobians* jacobians = nullptr, bool pose_jacobians = true) {
-  const Eigen::Matrix3d& R_w_h = host.R;
-  const Eigen::Matrix3d& R_t_w = target.R_inv;
-  const Eigen::Matrix3d& R_cam_cam0 = cam0_cam.R_inv;
-  const Eigen::Vector3d dt_w = host.t - target.t;
+// A target camera as the residual passes use it: the rotation from world axes into the camera
+// (R_cam_cam0 * R_target^T, once per frame and camera instead of two rotations per residual), the
+// target frame's cam0 origin in the world, and the camera's offset in its own axes
+// (R_cam_cam0 * t_cam0_cam, zero for cam0).
+struct TargetCamera {
+  const Eigen::Matrix3d& R_cam_w;
+  const Eigen::Vector3d& t_w_target;
+  const Eigen::Vector3d& offset_cam;
+};
+
+// Which pose Jacobians reprojectLandmark fills: none (a residual in its host frame, whose relative
+// pose is the fixed extrinsic), the host's only (the window's linearisation derives the target's
+// from it, see WindowOptimizer::linearize), or both.
+enum class PoseJacobians { kNone, kHost, kHostAndTarget };
+
+// Projects the landmark (bearing from HostBearing, built from the host's pose, and inverse distance
+// rho in the host frame's cam0, whose origin is t_w_host) into a camera of a target frame. Works in
+// homogeneous coordinates scaled by rho, so a point at infinity (rho = 0) is fine. Returns false
+// when the camera model cannot project it. jacobians->d_landmark is always set when jacobians are
+// asked for, the pose blocks as `poses` says.
+inline bool reprojectLandmark(const GenericCamera<double>& camera, const Eigen::Vector3d& t_w_host,
+                              const HostBearing& bearing, const TargetCamera& target, double rho, Eigen::Vector2d& uv,
+                              ReprojectionJacobians* jacobians = nullptr,
+                              PoseJacobians poses = PoseJacobians::kHostAndTarget) {
+  const Eigen::Vector3d dt_w = t_w_host - target.t_w_target;
   const Eigen::Vector3d& Rb_w = bearing.Rb_w;
   // v: the point relative to the target origin, in world axes, scaled by rho.
   const Eigen::Vector3d v_w = Rb_w + dt_w * rho;
-  const Eigen::Vector3d p_cam = R_cam_cam0 * (R_t_w * v_w - cam0_cam.t * rho);
+  const Eigen::Vector3d p_cam = target.R_cam_w * v_w - target.offset_cam * rho;
   Eigen::Matrix<double, 2, 3> d_uv_d_p;
   if (!camera.project(p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
   if (jacobians != nullptr) {
-    const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
-    const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_cam0 * R_t_w;
-    if (pose_jacobians) {
+    const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_p * target.R_cam_w;
+    if (poses != PoseJacobians::kNone) {
       jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
       jacobians->d_host.rightCols<3>() = -d_uv_d_v * SO3d::hat(Rb_w);
+    }
+    if (poses == PoseJacobians::kHostAndTarget) {
       jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
       // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
       jacobians->d_target.rightCols<3>() = d_uv_d_v * SO3d::hat(v_w);
     }
-    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * R_w_h * bearing.d_b_d_s;
-    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_cam0 * cam0_cam.t;
+    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * bearing.d_Rb_d_s;
+    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_p * target.offset_cam;
   }
   return true;
 }
 
-// The same with the landmark's stereographic bearing s.
-inline bool reprojectLandmark(const GenericCamera<double>& camera, const PoseMatrices& host, const PoseMatrices& target,
-                              const PoseMatrices& cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
-                              ReprojectionJacobians* jacobians = nullptr) {
-  return reprojectLandmark(camera, host, HostBearing(host, s, jacobians != nullptr), target, cam0_cam, rho, uv,
-                           jacobians);
+// A residual's Jacobian by its target pose is its Jacobian by its host pose times
+//   D = [[-I, dt^], [0, -I]],  dt = t_w_host - t_w_target,
+// (above: d_host = [rho A, -A Rb^], d_target = [-rho A, A (Rb + rho dt)^]). So the window's
+// linearisation sums J_host^T W J_host per (host, target) pair and maps it to the target's blocks
+// once per pair instead of forming J_target per residual. These apply D without forming it:
+// D^T X = [-X_top; -dt^ X_top - X_bottom] ...
+template <int Cols>
+Eigen::Matrix<double, 6, Cols> hostToTargetTransposed(const Eigen::Vector3d& dt,
+                                                      const Eigen::Matrix<double, 6, Cols>& X) {
+  Eigen::Matrix<double, 6, Cols> Y;
+  Y.template topRows<3>() = -X.template topRows<3>();
+  Y.template bottomRows<3>().noalias() = -SO3d::hat(dt) * X.template topRows<3>();
+  Y.template bottomRows<3>() -= X.template bottomRows<3>();
+  return Y;
+}
+// ... and X D = [-X_left, X_left dt^ - X_right].
+template <int Rows>
+Eigen::Matrix<double, Rows, 6> timesHostToTarget(const Eigen::Vector3d& dt, const Eigen::Matrix<double, Rows, 6>& X) {
+  Eigen::Matrix<double, Rows, 6> Y;
+  Y.template leftCols<3>() = -X.template leftCols<3>();
+  Y.template rightCols<3>().noalias() = X.template leftCols<3>() * SO3d::hat(dt);
+  Y.template rightCols<3>() -= X.template rightCols<3>();
+  return Y;
 }
 
-// The same from the poses themselves: T_world_host, T_world_target and T_cam0_cam.
+// The same for a camera of the host frame itself: the point is the bearing moved by the fixed
+// extrinsic (cam0: the bearing itself), with no pose Jacobian. R_cam_cam0 and offset_cam as in
+// TargetCamera; cam0 says the camera is the host's cam0 (identity extrinsic).
+inline bool reprojectInHost(const GenericCamera<double>& camera, const Eigen::Matrix3d& R_cam_cam0,
+                            const Eigen::Vector3d& offset_cam, bool cam0, const HostBearing& bearing, double rho,
+                            Eigen::Vector2d& uv, Eigen::Matrix<double, 2, 3>* d_landmark = nullptr) {
+  Eigen::Matrix<double, 2, 3> d_uv_d_p;
+  if (cam0) {
+    if (!camera.project(bearing.b, uv, d_landmark != nullptr ? &d_uv_d_p : nullptr)) return false;
+    if (d_landmark != nullptr) {
+      d_landmark->leftCols<2>() = d_uv_d_p * bearing.d_b_d_s;
+      d_landmark->col(2).setZero();
+    }
+    return true;
+  }
+  const Eigen::Vector3d p_cam = R_cam_cam0 * bearing.b - offset_cam * rho;
+  if (!camera.project(p_cam, uv, d_landmark != nullptr ? &d_uv_d_p : nullptr)) return false;
+  if (d_landmark != nullptr) {
+    const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
+    d_landmark->leftCols<2>() = d_uv_d_cam0 * bearing.d_b_d_s;
+    d_landmark->col(2) = -d_uv_d_p * offset_cam;
+  }
+  return true;
+}
+
+// The same from the poses themselves: T_world_host, T_world_target and T_cam0_cam (every Jacobian).
 inline bool reprojectLandmark(const GenericCamera<double>& camera, const SE3d& T_world_host, const SE3d& T_world_target,
                               const SE3d& T_cam0_cam, const Eigen::Vector2d& s, double rho, Eigen::Vector2d& uv,
                               ReprojectionJacobians* jacobians = nullptr) {
-  return reprojectLandmark(camera, PoseMatrices(T_world_host), PoseMatrices(T_world_target), PoseMatrices(T_cam0_cam),
-                           s, rho, uv, jacobians);
+  const PoseMatrices host(T_world_host), target(T_world_target), cam0_cam(T_cam0_cam);
+  const Eigen::Matrix3d R_cam_w = cam0_cam.R_inv * target.R_inv;
+  const Eigen::Vector3d offset_cam = cam0_cam.R_inv * cam0_cam.t;
+  return reprojectLandmark(camera, host.t, HostBearing(host, s, jacobians != nullptr),
+                           TargetCamera{R_cam_w, target.t, offset_cam}, rho, uv, jacobians);
 }
 
 }  // namespace voca

@@ -13,10 +13,14 @@
 
 namespace voca::backend {
 
-// Every window slot's pose as matrices, taken at the start of a pass over the residuals (see
-// PoseMatrices: converting the quaternions per residual was a large share of the backend's time).
-using WindowPoses = std::array<PoseMatrices, kMaxWindowFrames>;
-WindowPoses windowPoses(const Window& window);
+// A window slot's pose as the residual passes use it: T_w_c0 as matrices, and the rotation from
+// world axes into each camera of the rig, taken at the start of a pass (converting quaternions and
+// chaining rotations per residual was a large share of the backend's time).
+struct FramePose {
+  PoseMatrices T_w_c0;
+  std::array<Eigen::Matrix3d, 2> R_cam_w;
+};
+using WindowPoses = std::array<FramePose, kMaxWindowFrames>;
 
 class StereoResiduals {
  public:
@@ -24,43 +28,32 @@ class StereoResiduals {
   // Uses the rig's first two cameras (checked by the caller); observation noise and Huber threshold in pixels.
   StereoResiduals(const StereoRig& rig, double obs_std_dev_px, double huber_px);
 
-  // Reprojection of lm into camera `cam` of window slot `frame`, minus its observation there.
-  // False when the point cannot be projected or the residual is not finite.
-  bool residual(const Window& window, const Landmark& lm, int frame, int cam, Eigen::Vector2d& r,
-                ReprojectionJacobians* jac) const {
-    Eigen::Vector2d uv;
-    const auto c = static_cast<std::size_t>(cam);
-    if (!reprojectLandmark(cameras_[c], window[lm.host].T_w_c, window[frame].T_w_c, T_cam0_cam_[c], lm.s, lm.rho, uv,
-                           jac)) {
-      return false;
-    }
-    r = uv - lm.px[static_cast<std::size_t>(frame)][c];
-    return r.allFinite();
-  }
-  // The same with the window's poses from windowPoses() (still current).
-  bool residual(const WindowPoses& poses, const Landmark& lm, int frame, int cam, Eigen::Vector2d& r,
-                ReprojectionJacobians* jac) const {
-    Eigen::Vector2d uv;
-    const auto c = static_cast<std::size_t>(cam);
-    if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)],
-                           poses[static_cast<std::size_t>(frame)], cam0_cam_[c], lm.s, lm.rho, uv, jac)) {
-      return false;
-    }
-    r = uv - lm.px[static_cast<std::size_t>(frame)][c];
-    return r.allFinite();
-  }
-  // The same with the landmark's HostBearing, built from poses[lm.host] (with_jacobian when jac is
-  // asked for): what a pass over all of a landmark's residuals computes once. Without
-  // pose_jacobians only jac->d_landmark is set.
+  // Every window slot's pose as FramePose.
+  WindowPoses windowPoses(const Window& window) const;
+
+  // Reprojection of lm into camera `cam` of window slot `frame`, minus its observation there; false
+  // when the point cannot be projected or the residual is not finite. Takes the window's poses from
+  // windowPoses() (still current) and the landmark's HostBearing, built from poses[lm.host]
+  // (with_jacobian when jac is asked for): what a pass over all of a landmark's residuals computes once. In the host
+  // frame no pose Jacobian is set (its relative pose is the fixed extrinsic) unless Jacobians are asked for with
+  // kHostAndTarget; the residual itself is the same whether Jacobians are asked for or not.
   bool residual(const WindowPoses& poses, const HostBearing& bearing, const Landmark& lm, int frame, int cam,
-                Eigen::Vector2d& r, ReprojectionJacobians* jac, bool pose_jacobians = true) const {
+                Eigen::Vector2d& r, ReprojectionJacobians* jac,
+                PoseJacobians pose_jacobians = PoseJacobians::kHostAndTarget) const {
     Eigen::Vector2d uv;
     const auto c = static_cast<std::size_t>(cam);
-    if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)], bearing,
-                           poses[static_cast<std::size_t>(frame)], cam0_cam_[c], lm.rho, uv, jac, pose_jacobians)) {
+    const auto f = static_cast<std::size_t>(frame);
+    if (frame == lm.host && (jac == nullptr || pose_jacobians != PoseJacobians::kHostAndTarget)) {
+      if (!reprojectInHost(cameras_[c], cam0_cam_[c].R_inv, offset_cam_[c], cam == 0, bearing, lm.rho, uv,
+                           jac != nullptr ? &jac->d_landmark : nullptr)) {
+        return false;
+      }
+    } else if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)].T_w_c0.t, bearing,
+                                  TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho, uv, jac,
+                                  pose_jacobians)) {
       return false;
     }
-    r = uv - lm.px[static_cast<std::size_t>(frame)][c];
+    r = uv - lm.px[f][c];
     return r.allFinite();
   }
   // Weight of a residual of norm e in the normal equations (inverse variance times the Huber weight).
@@ -74,7 +67,8 @@ class StereoResiduals {
  private:
   std::array<GenericCamera<double>, 2> cameras_;
   std::array<SE3d, 2> T_cam0_cam_;
-  std::array<PoseMatrices, 2> cam0_cam_;  // T_cam0_cam_ as matrices
+  std::array<PoseMatrices, 2> cam0_cam_;       // T_cam0_cam_ as matrices
+  std::array<Eigen::Vector3d, 2> offset_cam_;  // R_cam_cam0 * t_cam0_cam (see TargetCamera)
   double huber_px_ = 1.0;
   double inv_var_ = 4.0;
 };

@@ -22,6 +22,7 @@ int triangulateNewLandmarks(int frame, const Window& window, LandmarkStore& land
                             const BackendConfig& config) {
   const WindowFrame& f = window[frame];
   const SE3d T_c_w = f.T_w_c.inverse();
+  const WindowPoses poses = model.windowPoses(window);
   enum class Outcome { kCreated, kSkipped, kFull };
   // A track seen in this frame's camera ref_cam: triangulated against the view with the widest
   // baseline and stored, like every landmark, as a bearing and inverse distance from this frame's
@@ -74,6 +75,7 @@ int triangulateNewLandmarks(int frame, const Window& window, LandmarkStore& land
     lm.s = stereographicProject(*p);
     lm.rho = rho;
     lm.mask = 0;
+    const HostBearing bearing(poses[static_cast<std::size_t>(frame)].T_w_c0, lm.s, false);
     // Every view of this track in the window, each checked against the triangulated point (the
     // left view that defines the bearing is exact by construction).
     for (int g = 0; g < kMaxWindowFrames; ++g) {
@@ -86,7 +88,7 @@ int triangulateNewLandmarks(int frame, const Window& window, LandmarkStore& land
         Eigen::Vector2d r;
         if (g == frame && c == 0) {
           lm.mask |= 1u << maskBit(g, c);
-        } else if (model.residual(window, lm, g, c, r, nullptr) && r.norm() <= config.outlier_threshold_px) {
+        } else if (model.residual(poses, bearing, lm, g, c, r, nullptr) && r.norm() <= config.outlier_threshold_px) {
           lm.mask |= 1u << maskBit(g, c);
         }
       }

@@ -28,16 +28,16 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
 void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
   const LandmarkStore& landmarks = state.landmarks;
   const std::uint32_t bits = frameBits(frame);
-  WindowPoses poses = windowPoses(state.window);
+  WindowPoses poses = model_.windowPoses(state.window);
   for (int it = 0; it < config_.pose_only_iterations; ++it) {
-    poses[static_cast<std::size_t>(frame)].set(state.window[frame].T_w_c);
+    if (it > 0) poses = model_.windowPoses(state.window);
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Vector6d b = Vector6d::Zero();
     int count = 0;
     for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
       const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
       if (!lm.alive || (lm.mask & bits) == 0) continue;
-      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, true);
+      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, true);
       for (int c = 0; c < 2; ++c) {
         if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
         Eigen::Vector2d r;
@@ -75,13 +75,13 @@ double WindowOptimizer::totalCost(const WindowState& state, std::size_t count) c
 
 double WindowOptimizer::cost(const WindowState& state) const {
   const LandmarkStore& landmarks = state.landmarks;
-  const WindowPoses poses = windowPoses(state.window);
+  const WindowPoses poses = model_.windowPoses(state.window);
   double total = 0.0;
   // Per landmark, then over landmarks from the last: the order linearize() sums in (see totalCost).
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
     const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
     if (!lm.alive) continue;
-    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     double landmark_cost = 0.0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
@@ -94,13 +94,16 @@ double WindowOptimizer::cost(const WindowState& state) const {
   return total + state.prior.cost(state.window);
 }
 
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
 double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian) {
   WindowMatrix& H = H_;
   WindowVector& b = b_;
   H.setZero();
   b.setZero();
+  targets_of_host_.fill(0u);
   const std::vector<int>& list = only_landmarks != nullptr ? *only_landmarks : state.landmarks.alive();
-  const WindowPoses poses = windowPoses(state.window);
+  const WindowPoses poses = model_.windowPoses(state.window);
   int next_block = 0;
   for (std::size_t k = 0; k < list.size(); ++k) {
     const Landmark& lm = state.landmarks[list[k]];
@@ -112,46 +115,83 @@ double WindowOptimizer::linearize(const WindowState& state, const std::vector<in
     L.b_l.setZero();
     L.frames = 0;
     L.first_block = next_block;
-    int blocks = 0;
     const int h = lm.host;
-    const HostBearing bearing(poses[static_cast<std::size_t>(h)], lm.s, true);
+    const HostBearing bearing(poses[static_cast<std::size_t>(h)].T_w_c0, lm.s, true);
+    // J_host^T W J_landmark per target frame: H_pl of the host is their sum, that of a target its
+    // own times D^T (see hostToTargetTransposed; once per landmark and target, not per residual).
+    std::array<Mat63, kMaxWindowFrames> host_pl;
+    std::uint32_t targets = 0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       const int t = bit / 2;
       Eigen::Vector2d r;
       ReprojectionJacobians J;
-      // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian.
-      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J, t != h)) {
+      // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian. Elsewhere only
+      // the host's: the target's is the host's times D, applied per frame pair below.
+      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J,
+                           t != h ? PoseJacobians::kHost : PoseJacobians::kNone)) {
         L.cost += residualCost(false, 0.0);
         continue;
       }
       const double e = r.norm();
       L.cost += residualCost(true, e);
       const double w = model_.weight(e);
-      L.H_ll.noalias() += w * J.d_landmark.transpose() * J.d_landmark;
-      L.b_l.noalias() += w * J.d_landmark.transpose() * r;
+      const Eigen::Matrix<double, 3, 2> JlW = w * J.d_landmark.transpose();
+      L.H_ll.noalias() += JlW * J.d_landmark;
+      L.b_l.noalias() += JlW * r;
       L.valid = true;
       if (t == h) continue;
-      for (const int f : {h, t}) {
-        if ((L.frames & (1u << f)) == 0) {
-          L.block[static_cast<std::size_t>(f)] = static_cast<std::uint8_t>(blocks++);
-          H_pl(L, f).setZero();
-          L.frames |= 1u << f;
-        }
-      }
       const Eigen::Matrix<double, 6, 2> JhW = w * J.d_host.transpose();
-      const Eigen::Matrix<double, 6, 2> JtW = w * J.d_target.transpose();
-      H.block<6, 6>(6 * h, 6 * h).noalias() += JhW * J.d_host;
-      H.block<6, 6>(6 * t, 6 * t).noalias() += JtW * J.d_target;
-      // The LM solve reads only the lower triangle (LDLT<Lower>): the block above is skipped there.
-      if (full_hessian || h > t) H.block<6, 6>(6 * h, 6 * t).noalias() += JhW * J.d_target;
-      if (full_hessian || t > h) H.block<6, 6>(6 * t, 6 * h).noalias() += JtW * J.d_host;
-      b.segment<6>(6 * h).noalias() += JhW * r;
-      b.segment<6>(6 * t).noalias() += JtW * r;
-      H_pl(L, h).noalias() += JhW * J.d_landmark;
-      H_pl(L, t).noalias() += JtW * J.d_landmark;
+      PairLin& pair = pairs_[static_cast<std::size_t>(h * kMaxWindowFrames + t)];
+      const std::uint32_t target_bit = 1u << t;
+      if ((targets_of_host_[static_cast<std::size_t>(h)] & target_bit) == 0) {
+        targets_of_host_[static_cast<std::size_t>(h)] |= target_bit;
+        pair.H.setZero();
+        pair.b.setZero();
+      }
+      pair.H.noalias() += JhW * J.d_host;
+      pair.b.noalias() += JhW * r;
+      if ((targets & target_bit) == 0) {
+        targets |= target_bit;
+        host_pl[static_cast<std::size_t>(t)].setZero();
+      }
+      host_pl[static_cast<std::size_t>(t)].noalias() += JhW * J.d_landmark;
     }
-    next_block += blocks;
+    if (targets != 0) {
+      L.frames = targets | (1u << h);
+      int blocks = 0;
+      for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
+        L.block[static_cast<std::size_t>(std::countr_zero(m))] = static_cast<std::uint8_t>(blocks++);
+      }
+      Mat63& pl_host = H_pl(L, h);
+      pl_host.setZero();
+      const Eigen::Vector3d& t_host = poses[static_cast<std::size_t>(h)].T_w_c0.t;
+      for (std::uint32_t m = targets; m != 0; m &= m - 1) {
+        const int t = std::countr_zero(m);
+        const Mat63& X = host_pl[static_cast<std::size_t>(t)];
+        pl_host += X;
+        H_pl(L, t) = hostToTargetTransposed<3>(t_host - poses[static_cast<std::size_t>(t)].T_w_c0.t, X);
+      }
+      next_block += blocks;
+    }
+  }
+  // Pose blocks from each (host, target) pair's J_host^T W J_host: host-host as is, target-target
+  // D^T H D, target-host D^T H.
+  for (int h = 0; h < kMaxWindowFrames; ++h) {
+    const Eigen::Vector3d& t_host = poses[static_cast<std::size_t>(h)].T_w_c0.t;
+    for (std::uint32_t m = targets_of_host_[static_cast<std::size_t>(h)]; m != 0; m &= m - 1) {
+      const int t = std::countr_zero(m);
+      const PairLin& pair = pairs_[static_cast<std::size_t>(h * kMaxWindowFrames + t)];
+      const Eigen::Vector3d dt = t_host - poses[static_cast<std::size_t>(t)].T_w_c0.t;
+      const Matrix6d DtH = hostToTargetTransposed<6>(dt, pair.H);
+      H.block<6, 6>(6 * h, 6 * h) += pair.H;
+      H.block<6, 6>(6 * t, 6 * t) += timesHostToTarget<6>(dt, DtH);
+      // The LM solve reads only the lower triangle (LDLT<Lower>): the block above is skipped there.
+      if (full_hessian || t > h) H.block<6, 6>(6 * t, 6 * h) += DtH;
+      if (full_hessian || h > t) H.block<6, 6>(6 * h, 6 * t) += DtH.transpose();
+      b.segment<6>(6 * h) += pair.b;
+      b.segment<6>(6 * t) += hostToTargetTransposed<1>(dt, pair.b);
+    }
   }
   state.prior.addTo(state.window, H, b);
   return totalCost(state, list.size());
@@ -293,7 +333,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
 
 void WindowOptimizer::filterOutliers(const WindowState& state) const {
   LandmarkStore& landmarks = state.landmarks;
-  const WindowPoses poses = windowPoses(state.window);
+  const WindowPoses poses = model_.windowPoses(state.window);
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
     const int i = landmarks.alive()[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks[i];
@@ -303,7 +343,7 @@ void WindowOptimizer::filterOutliers(const WindowState& state) const {
       continue;
     }
     std::uint32_t outliers = 0;
-    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)], lm.s, false);
+    const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;

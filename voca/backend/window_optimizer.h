@@ -89,6 +89,14 @@ class WindowOptimizer {
   StereoResiduals model_;
   std::vector<LandmarkLin> lin_;  // by position in the landmark list of the last linearize()
   std::vector<Mat63> H_pl_;
+  // J_host^T W J_host and J_host^T W r summed per (host, target) frame pair, at host * slots + target;
+  // valid where the host's bit mask in targets_of_host_ has the target.
+  struct PairLin {
+    Eigen::Matrix<double, 6, 6> H;
+    Vector6d b;
+  };
+  std::array<PairLin, kMaxWindowFrames * kMaxWindowFrames> pairs_;
+  std::array<std::uint32_t, kMaxWindowFrames> targets_of_host_{};
   // Work space (fixed size, so the solver never allocates).
   WindowMatrix H_, H_reduced_;
   WindowVector b_, b_reduced_, dx_;
