@@ -460,3 +460,54 @@ TEST_CASE("hand-derived projections") {
   REQUIRE(PinholeRadtan8Camera<double>(rt_params).project(Eigen::Vector3d(0.2, 0.4, 2.0), uv));
   CHECK(uv[0] == doctest::Approx(320.0 + 400.0 * 0.1 / 1.05).epsilon(1e-14));
 }
+
+TEST_CASE("atan2NonNegative agrees with std::atan2 to a few units in the last place over [0, pi]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> angle(0.0, std::numbers::pi);
+  std::uniform_real_distribution<double> log_scale(-6.0, 6.0);
+  double worst_ulps = 0.0;
+  for (int trial = 0; trial < 200000; ++trial) {
+    const double a = angle(rng), scale = std::pow(10.0, log_scale(rng));
+    const double y = std::abs(scale * std::sin(a)), x = scale * std::cos(a);
+    const double expected = std::atan2(y, x);
+    const double got = voca::camera_detail::atan2NonNegative(y, x);
+    const double ulp = std::nextafter(expected, 4.0) - expected;
+    worst_ulps = std::max(worst_ulps, std::abs(got - expected) / ulp);
+  }
+  // Cephes' rational is good to about 1e-16 relative on its reduced range; the reductions by pi/4,
+  // pi/2 and pi - angle add at most a rounding each, so 4 units in the last place bound it.
+  CHECK(worst_ulps <= 4.0);
+  // The axes, the branch boundaries of the reduction and the origin.
+  for (const auto& [y, x] : {std::pair{0.0, 1.0},
+                             {1.0, 0.0},
+                             {0.0, -1.0},
+                             {1.0, -0.0},
+                             {0.66, 1.0},
+                             {2.41421356237309504880, 1.0},
+                             {1.0, 1.0},
+                             {0.0, 0.0}}) {
+    CHECK(std::abs(voca::camera_detail::atan2NonNegative(y, x) - std::atan2(y, x)) <=
+          4e-16 * std::max(1.0, std::atan2(y, x)));
+  }
+}
+
+TEST_CASE("kb4 with the fast angle projects as with std::atan2") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  KannalaBrandt4Camera<double> exact(t265Kb4()), fast(t265Kb4());
+  fast.setFastAngle(true);
+  int projected = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    Eigen::Vector2d uv_exact, uv_fast;
+    Eigen::Matrix<double, 2, 3> J_exact, J_fast;
+    const bool ok = exact.project(p, uv_exact, &J_exact);
+    REQUIRE(fast.project(p, uv_fast, &J_fast) == ok);
+    if (!ok) continue;
+    ++projected;
+    // A few ulps in theta move the pixel by ~1e-13 px at these focal lengths.
+    CHECK((uv_fast - uv_exact).norm() <= 1e-10);
+    CHECK((J_fast - J_exact).norm() <= 1e-9 * std::max(1.0, J_exact.norm()));
+  }
+  CHECK(projected > 10000);
+}

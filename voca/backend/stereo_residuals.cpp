@@ -16,6 +16,7 @@ StereoResiduals::StereoResiduals(const StereoRig& rig, double obs_std_dev_px, do
     : huber_px_(huber_px), inv_var_(1.0 / (obs_std_dev_px * obs_std_dev_px)) {
   for (std::size_t c = 0; c < 2; ++c) {
     cameras_[c] = rig.cameras[c].camera;
+    cameras_[c].setFastAngle(true);
   }
   T_cam0_cam_[0] = SE3d();
   T_cam0_cam_[1] = rig.T_cam0_cam1();

@@ -86,6 +86,15 @@ class GenericCamera {
     return visit([&](const auto& model) { return model.unproject(uv, bearing, d_bearing_d_uv); });
   }
 
+  // Lets the models that have a faster angle computation use it (see KannalaBrandt4Camera::setFastAngle).
+  void setFastAngle(bool fast) {
+    std::visit(
+        [fast](auto& model) {
+          if constexpr (requires { model.setFastAngle(fast); }) model.setFastAngle(fast);
+        },
+        camera_);
+  }
+
   template <class F>
   decltype(auto) visit(F&& f) const {
     return std::visit(std::forward<F>(f), camera_);
