@@ -231,6 +231,37 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
   CHECK(checked > 100);
 }
 
+TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there, bit for bit") {
+  using backend::kWindowDim, backend::WindowMatrix;
+  std::mt19937 rng(15);
+  std::uniform_real_distribution<double> value(-1e3, 1e3);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Matrix<double, 6, 3> A, B;
+    for (int k = 0; k < 18; ++k) {
+      A(k) = value(rng);
+      B(k) = value(rng);
+    }
+    const int offset = 6 * (trial % kMaxWindowFrames);
+    WindowMatrix H, expected;
+    for (int k = 0; k < H.size(); ++k) H(k) = value(rng);
+    expected = H;
+    expected.block<6, 6>(offset, offset).noalias() -= A * B.transpose();
+    const WindowMatrix before = H;
+    backend::subtractLowerTriangle(A, B, offset, H);
+    for (int c = 0; c < kWindowDim; ++c) {
+      for (int r = 0; r < kWindowDim; ++r) {
+        const bool in_lower = r >= offset && r < offset + 6 && c >= offset && c < offset + 6 && r >= c;
+        // Exact equality: the reduced system must not change by a rounding.
+        if (in_lower) {
+          REQUIRE(H(r, c) == expected(r, c));
+        } else {
+          REQUIRE(H(r, c) == before(r, c));
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("backend: id map agrees with std::unordered_map under random inserts and erases") {
   IdSlotMap map(500);
   std::unordered_map<std::uint64_t, int> reference;

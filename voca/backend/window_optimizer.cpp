@@ -280,12 +280,13 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
           const int f = std::countr_zero(m);
           T[static_cast<std::size_t>(f)].noalias() = H_pl(L, f) * L.H_ll_inv;
           b_reduced_.segment<6>(6 * f).noalias() -= T[static_cast<std::size_t>(f)] * L.b_l;
-          // Slots g <= f: the bits of L.frames up to and including f.
-          const std::uint32_t lower = L.frames & ((2u << f) - 1u);
+          // Slots g < f: the bits of L.frames below f; the block (f, f) apart, lower triangle only.
+          const std::uint32_t lower = L.frames & ((1u << f) - 1u);
           for (std::uint32_t n = lower; n != 0; n &= n - 1) {
             const int g = std::countr_zero(n);
             H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -= T[static_cast<std::size_t>(f)] * H_pl(L, g).transpose();
           }
+          subtractLowerTriangle(T[static_cast<std::size_t>(f)], H_pl(L, f), 6 * f, H_reduced_);
         }
       }
       for (int f = 0; f < kMaxWindowFrames; ++f) {

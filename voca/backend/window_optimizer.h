@@ -25,6 +25,19 @@ struct WindowState {
   MarginalizationPrior& prior;
 };
 
+// H(offset + i, offset + j) -= (A B^T)(i, j) for i >= j: the lower triangle of a diagonal block of the
+// reduced camera system, the only part its LDLT reads (the upper half was a third of the block
+// products formed per landmark). The sum runs in the order of Eigen's lazy product,
+// ((a0 b0 + a1 b1) + a2 b2), so the entries are bit for bit the ones the full block product gives.
+inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A, const Eigen::Matrix<double, 6, 3>& B,
+                                  int offset, WindowMatrix& H) {
+  for (int j = 0; j < 6; ++j) {
+    for (int i = j; i < 6; ++i) {
+      H(offset + i, offset + j) -= A(i, 0) * B(j, 0) + A(i, 1) * B(j, 1) + A(i, 2) * B(j, 2);
+    }
+  }
+}
+
 class WindowOptimizer {
  public:
   WindowOptimizer() = default;
