@@ -262,6 +262,43 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
   }
 }
 
+TEST_CASE("backend: the outlier filter with the bits of a cost pass removes exactly what its own pass removes") {
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 2.0;  // about a third of the residuals beyond the 3 px threshold
+  sc.seed = 7;
+  sc.duration_s = 2.0;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  BackendConfig config;
+  config.max_iterations = 2;
+  VoEstimator a(config, rig), b(config, rig);
+  int checked = 0;
+  int filtered = 0;
+  for (std::size_t k = 0; k < seq.frames.size(); ++k) {
+    REQUIRE(a.process(seq.frames[k]).state != TrackingState::kLost);
+    REQUIRE(b.process(seq.frames[k]).state != TrackingState::kLost);
+    if (k < 10 || k % 5 != 0) continue;
+    // LM without the filter moves the window away from the state process() filtered at.
+    const double cost_before = a.optimizeWindow(3);
+    REQUIRE(b.optimizeWindow(3) == cost_before);
+    const int observations = a.filterWindowOutliers(true);
+    CHECK(b.filterWindowOutliers(false) == observations);
+    CHECK(a.numLandmarks() == b.numLandmarks());
+    const double cost_after = a.optimizeWindow(0);
+    CHECK(b.optimizeWindow(0) == cost_after);
+    if (cost_after < cost_before) ++filtered;  // the filter removed something
+    ++checked;
+  }
+  CHECK(checked >= 4);
+  CHECK(filtered >= 1);
+  const auto poses_a = a.windowPoses(), poses_b = b.windowPoses();
+  REQUIRE(poses_a.size() == poses_b.size());
+  for (std::size_t i = 0; i < poses_a.size(); ++i) {
+    CHECK(poses_a[i].first == poses_b[i].first);
+    CHECK(poses_a[i].second.matrix() == poses_b[i].second.matrix());
+  }
+}
+
 TEST_CASE("backend: id map agrees with std::unordered_map under random inserts and erases") {
   IdSlotMap map(500);
   std::unordered_map<std::uint64_t, int> reference;

@@ -423,6 +423,15 @@ double VoEstimator::optimizeWindow(int iterations) {
   return optimizer_.cost(state());
 }
 
+int VoEstimator::filterWindowOutliers(bool from_cost_pass) {
+  std::vector<std::uint32_t> outliers(landmarks_.alive().size());
+  if (from_cost_pass) optimizer_.cost(state(), outliers.data());
+  optimizer_.filterOutliers(state(), from_cost_pass ? outliers.data() : nullptr);
+  int observations = 0;
+  for (const int i : landmarks_.alive()) observations += landmarks_[i].numObs();
+  return observations;
+}
+
 double VoEstimator::linearizedWindowCost() { return initialized_ ? optimizer_.linearizedCost(state()) : 0.0; }
 
 bool VoEstimator::dropViewsOfOldestKeyframe() {

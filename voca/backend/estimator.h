@@ -89,6 +89,9 @@ class VoEstimator {
   double optimizeWindow(int iterations);
   // The window's cost as LM's linearisation computes it: must equal optimizeWindow(0).
   double linearizedWindowCost();
+  // Removes the window's outliers as optimize() does, with the outlier bits from a cost pass
+  // (from_cost_pass) or from the filter's own residual pass; returns the observations left.
+  int filterWindowOutliers(bool from_cost_pass);
   bool marginalizeOldestKeyframe();
   // The reference for marginalisation: makes only the changes to observations that marginalising
   // the oldest keyframe makes (re-hosting, dropping its views of landmarks that stay) and keeps the

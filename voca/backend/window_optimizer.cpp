@@ -21,6 +21,7 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
     : config_(config), model_(model) {
   lin_.resize(static_cast<std::size_t>(config_.max_landmarks));
   H_pl_.resize(static_cast<std::size_t>(config_.max_landmarks) * kMaxWindowFrames);
+  outliers_.resize(static_cast<std::size_t>(config_.max_landmarks));
 }
 
 // ---- single-frame pose step ---------------------------------------------------------------------
@@ -73,7 +74,9 @@ double WindowOptimizer::totalCost(const WindowState& state, std::size_t count) c
   return total + state.prior.cost(state.window);
 }
 
-double WindowOptimizer::cost(const WindowState& state) const {
+double WindowOptimizer::cost(const WindowState& state) const { return cost(state, nullptr); }
+
+double WindowOptimizer::cost(const WindowState& state, std::uint32_t* outliers) const {
   const LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = model_.windowPoses(state.window);
   double total = 0.0;
@@ -83,12 +86,17 @@ double WindowOptimizer::cost(const WindowState& state) const {
     if (!lm.alive) continue;
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     double landmark_cost = 0.0;
+    std::uint32_t outlier_bits = 0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
       const bool projected = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr);
-      landmark_cost += residualCost(projected, projected ? r.norm() : 0.0);
+      const double e = projected ? r.norm() : 0.0;
+      landmark_cost += residualCost(projected, e);
+      // filterOutliers' test, on the same residual.
+      if (!projected || e > config_.outlier_threshold_px) outlier_bits |= 1u << bit;
     }
+    if (outliers != nullptr) outliers[k] = outlier_bits;
     total += landmark_cost;
   }
   return total + state.prior.cost(state.window);
@@ -247,9 +255,13 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
   bool linearized = false;
   double current = 0.0;
   int it = 0;
+  // Before the filter, a step judged by a cost pass also gives the filter's outlier bits at the state
+  // it leaves (outliers_): the filter that follows needs no residual pass of its own.
+  bool outliers_ready = false;
+  std::uint32_t* const outliers = filtered ? nullptr : outliers_.data();
   for (; it < max_iterations; ++it) {
     if (!filtered && it >= config_.filter_iteration) {
-      filterOutliers(state);
+      filterOutliers(state, outliers_ready ? outliers : nullptr);
       filtered = true;
       linearized = false;
     }
@@ -258,6 +270,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
     linearized = false;
     bool accepted = false;
     bool converged = false;
+    outliers_ready = false;
     for (int attempt = 0; attempt < 8; ++attempt) {
       // Reduced camera system: damp, eliminate every landmark (Schur complement per landmark). Only
       // the lower triangle is formed: the LDLT reads nothing else, so the upper half would be
@@ -299,9 +312,10 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       if (dx_.allFinite()) {
         backup(state);
         applyIncrement(state, dx_);
-        const double next = linearize_next ? linearize(state, nullptr, false) : cost(state);
+        const double next = linearize_next ? linearize(state, nullptr, false) : cost(state, outliers);
         if (std::isfinite(next) && next <= current) {
           accepted = true;
+          outliers_ready = !linearize_next && !filtered;
           linearized = linearize_next;
           converged = current - next <= config_.converged_relative_decrease * current;
           current = next;
@@ -319,7 +333,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
     if (!accepted || converged) {
       if (!filtered) {
         // Converged before the filter iteration: filter now and optimise the cleaned problem.
-        filterOutliers(state);
+        filterOutliers(state, outliers_ready ? outliers : nullptr);
         filtered = true;
         linearized = false;
         continue;
@@ -328,11 +342,13 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       break;
     }
   }
-  if (!filtered) filterOutliers(state);
+  if (!filtered) filterOutliers(state, outliers_ready ? outliers : nullptr);
   return it;
 }
 
-void WindowOptimizer::filterOutliers(const WindowState& state) const {
+void WindowOptimizer::filterOutliers(const WindowState& state) const { filterOutliers(state, nullptr); }
+
+void WindowOptimizer::filterOutliers(const WindowState& state, const std::uint32_t* precomputed) const {
   LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = model_.windowPoses(state.window);
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
@@ -343,9 +359,11 @@ void WindowOptimizer::filterOutliers(const WindowState& state) const {
       landmarks.remove(i);
       continue;
     }
-    std::uint32_t outliers = 0;
+    // Removing a landmark moves the last one of alive() to its position, one already visited: the
+    // positions still to come keep their landmarks (and their precomputed bits).
+    std::uint32_t outliers = precomputed != nullptr ? precomputed[k] : 0u;
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
-    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+    for (std::uint32_t m = precomputed != nullptr ? 0u : lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       Eigen::Vector2d r;
       if (!model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr) ||

@@ -56,6 +56,12 @@ class WindowOptimizer {
   // Removes observations off by more than the outlier threshold; landmarks whose host view is an
   // outlier, that keep too few views or whose depth left the valid range die.
   void filterOutliers(const WindowState& state) const;
+  // cost(), and with `outliers` (room for every live landmark) the filter's outlier bits of each
+  // landmark by its position in alive(), from the same residuals: what optimize() does before its
+  // filter, so that the filter needs no residual pass of its own.
+  double cost(const WindowState& state, std::uint32_t* outliers) const;
+  // filterOutliers, with the outlier bits from cost(state, outliers) at this same state when not null.
+  void filterOutliers(const WindowState& state, const std::uint32_t* outliers) const;
   // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed.
   void optimizePose(const WindowState& state, int frame) const;
 
@@ -102,6 +108,7 @@ class WindowOptimizer {
   StereoResiduals model_;
   std::vector<LandmarkLin> lin_;  // by position in the landmark list of the last linearize()
   std::vector<Mat63> H_pl_;
+  std::vector<std::uint32_t> outliers_;  // cost(state, outliers_.data()) before the filter
   // J_host^T W J_host and J_host^T W r summed per (host, target) frame pair, at host * slots + target;
   // valid where the host's bit mask in targets_of_host_ has the target.
   struct PairLin {
