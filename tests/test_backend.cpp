@@ -219,7 +219,7 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
         const PoseMatrices host(T_w_h), cam0_cam(T_cam0_cam);
         const HostBearing bearing(host, s, true);
         const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
-        Eigen::Matrix<double, 2, 3> d_landmark;
+        Eigen::Matrix<double, 2, 3> d_landmark = Eigen::Matrix<double, 2, 3>::Zero();
         REQUIRE(reprojectInHost(camera, cam0_cam.R_inv, offset, cam == 0, bearing, rho, uv_host, &d_landmark));
         // The full model rotates the bearing out of the host and back in: ~1e-15 relative in the point.
         CHECK((uv_host - uv_full).norm() <= 1e-9);
