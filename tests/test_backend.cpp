@@ -231,8 +231,16 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
   CHECK(checked > 100);
 }
 
-TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there, bit for bit") {
+TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there") {
   using backend::kWindowDim, backend::WindowMatrix;
+  // Bit for bit on x86-64 without FMA (the shipped build: the reduced system does not change by a
+  // rounding). Where the compiler fuses multiply-adds (aarch64) the two evaluation orders may round
+  // differently: a few units in the last place of terms up to 3e6 here, far below any missing term.
+#if defined(__x86_64__) && !defined(__FMA__)
+  constexpr double kTolerance = 0.0;
+#else
+  constexpr double kTolerance = 1e-8;
+#endif
   std::mt19937 rng(15);
   std::uniform_real_distribution<double> value(-1e3, 1e3);
   for (int trial = 0; trial < 50; ++trial) {
@@ -251,9 +259,8 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
     for (int c = 0; c < kWindowDim; ++c) {
       for (int r = 0; r < kWindowDim; ++r) {
         const bool in_lower = r >= offset && r < offset + 6 && c >= offset && c < offset + 6 && r >= c;
-        // Exact equality: the reduced system must not change by a rounding.
         if (in_lower) {
-          REQUIRE(H(r, c) == expected(r, c));
+          REQUIRE(std::abs(H(r, c) - expected(r, c)) <= kTolerance);
         } else {
           REQUIRE(H(r, c) == before(r, c));
         }
