@@ -27,6 +27,25 @@ SE3d randomPose(std::mt19937& rng, double translation_m) {
   return SE3d::exp(xi);
 }
 
+// A landmark and two frames that see it: a random host pose, a target near it looking roughly the
+// same way (farther along a fixed motion for later trials), a bearing near the optical axis and an
+// inverse distance of 0.2-0.6 /m. Shared by the Jacobian tests so they draw the same configurations.
+struct ViewConfig {
+  SE3d T_w_h, T_w_t;
+  Eigen::Vector2d s;
+  double rho = 0.0;
+};
+ViewConfig randomViewConfig(std::mt19937& rng, int trial) {
+  ViewConfig v;
+  v.T_w_h = randomPose(rng, 1.0);
+  v.T_w_t = v.T_w_h * SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, -0.1, 0.1, 0.05, -0.08, 0.03).finished() *
+                                (0.5 + trial / 40.0));
+  std::normal_distribution<double> g(0.0, 0.2);
+  v.s = Eigen::Vector2d(g(rng), g(rng));
+  v.rho = 0.2 + 0.1 * (trial % 5);
+  return v;
+}
+
 // Runs the estimator over a synthetic sequence; returns the body poses it output.
 struct RunResult {
   std::vector<SE3d> T_world_body;
@@ -127,14 +146,7 @@ TEST_CASE("backend: reprojection Jacobians match numerical ones for every camera
   int checked = 0;
   for (const auto& [camera, T_cam0_cam] : cases) {
     for (int trial = 0; trial < 40; ++trial) {
-      const SE3d T_w_h = randomPose(rng, 1.0);
-      // Target near the host, looking roughly the same way, so the point is visible.
-      const SE3d T_w_t =
-          T_w_h * SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, -0.1, 0.1, 0.05, -0.08, 0.03).finished() *
-                            (0.5 + trial / 40.0));
-      std::normal_distribution<double> g(0.0, 0.2);
-      const Eigen::Vector2d s(g(rng), g(rng));
-      const double rho = 0.2 + 0.1 * (trial % 5);
+      const auto [T_w_h, T_w_t, s, rho] = randomViewConfig(rng, trial);
       Eigen::Vector2d uv;
       ReprojectionJacobians J;
       if (!reprojectLandmark(camera, T_w_h, T_w_t, T_cam0_cam, s, rho, uv, &J)) continue;
@@ -187,13 +199,7 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
       const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
       const SE3d T_cam0_cam = cam == 0 ? SE3d() : rig->T_cam0_cam1();
       for (int trial = 0; trial < 40; ++trial) {
-        const SE3d T_w_h = randomPose(rng, 1.0);
-        const SE3d T_w_t =
-            T_w_h * SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, -0.1, 0.1, 0.05, -0.08, 0.03).finished() *
-                              (0.5 + trial / 40.0));
-        std::normal_distribution<double> g(0.0, 0.2);
-        const Eigen::Vector2d s(g(rng), g(rng));
-        const double rho = 0.2 + 0.1 * (trial % 5);
+        const auto [T_w_h, T_w_t, s, rho] = randomViewConfig(rng, trial);
         Eigen::Vector2d uv;
         ReprojectionJacobians J;
         if (!reprojectLandmark(camera, T_w_h, T_w_t, T_cam0_cam, s, rho, uv, &J)) continue;
