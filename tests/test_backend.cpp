@@ -352,6 +352,44 @@ TEST_CASE("backend: noise-free observations over 4 s give the exact trajectory")
   CHECK(max_r < 0.01);
 }
 
+TEST_CASE("backend: a new frame that mostly disagrees with its pose guess keeps its views for the window to judge") {
+  // Without a pose-only step every new frame starts at the constant-velocity guess, which on this
+  // fast motion puts most of its views beyond the outlier threshold: a stand-in for a pose step that
+  // did not converge (a blurred frame, a jerk the guess missed).
+  const StereoRig rig = synth::eurocRig();
+  const SyntheticObservations seq = shortNoiseFreeSequence(rig);
+  for (const double share : {1.0, 0.5}) {
+    BackendConfig config;
+    config.pose_only_iterations = 0;
+    config.max_frame_outlier_share = share;
+    VoEstimator estimator(config, rig);
+    std::vector<SE3d> poses;
+    int resets = 0, lost = 0, most_views_culled = 0;
+    for (const TrackedStereoFrame& f : seq.frames) {
+      const PoseEstimate& e = estimator.process(f);
+      poses.push_back(e.T_world_body);
+      resets += e.state == TrackingState::kReset;
+      lost += e.state == TrackingState::kLost;
+      const std::size_t views = f.observations[0].size() + f.observations[1].size();
+      most_views_culled += 2 * static_cast<std::size_t>(e.num_outliers) > views;
+    }
+    const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
+    MESSAGE("share " << share << ": " << most_views_culled << " frames lost most views to the cull, " << lost
+                     << " lost, " << resets << " resets, max error " << max_t * 1000 << " mm, " << max_r << " deg");
+    if (share == 1.0) {
+      // Basalt's cull: the frame keeps too few views and tracking breaks.
+      CHECK(most_views_culled > 0);
+      CHECK(resets > 0);
+    } else {
+      CHECK(most_views_culled == 0);
+      CHECK(lost == 0);
+      CHECK(resets == 0);
+      CHECK(max_t < 1e-3);  // the bounds of the run with the pose-only step
+      CHECK(max_r < 0.01);
+    }
+  }
+}
+
 TEST_CASE("backend: LM judges steps by the plain cost, and the window's cost never rises over iterations") {
   // LM judges each step by the cost that the next linearisation computes along the way: it must be
   // the plain cost pass (optimizeWindow(0)) to the bit, or a step that raises the true cost could

@@ -21,6 +21,7 @@ const Field kFields[] = {
     {"obs_huber_thresh_px", &BackendConfig::obs_huber_thresh_px, 1e-3, 1000.0},
     {"outlier_threshold_px", &BackendConfig::outlier_threshold_px, 1e-3, 1000.0},
     {"filter_iteration", &BackendConfig::filter_iteration, 0, 100},
+    {"max_frame_outlier_share", &BackendConfig::max_frame_outlier_share, 0.0, 1.0},
     {"min_triangulation_dist_m", &BackendConfig::min_triangulation_dist_m, 0.0, 100.0},
     {"min_inverse_distance", &BackendConfig::min_inverse_distance, 0.0, 1e3},
     {"max_inverse_distance", &BackendConfig::max_inverse_distance, 1e-6, 1e3},

@@ -26,6 +26,11 @@ struct BackendConfig {
   double obs_huber_thresh_px = 1.0;   // vio_obs_huber_thresh
   double outlier_threshold_px = 3.0;  // vio_outlier_threshold
   int filter_iteration = 4;           // vio_filter_iteration: outlier filter after this many LM iterations
+  // The new frame's observations beyond outlier_threshold_px after the pose-only step are removed
+  // only while they are at most this share of the frame's: when more disagree with that pose, the
+  // pose is the likelier culprit (a motion the constant-velocity guess missed, a blurred frame), and
+  // the window optimisation's filter judges them instead. 1 removes them always (Basalt).
+  double max_frame_outlier_share = 0.5;
   // Triangulation.
   double min_triangulation_dist_m = 0.05;  // vio_min_triangulation_dist
   double min_inverse_distance = 1e-3;      // 1/m; farther points carry no translation information

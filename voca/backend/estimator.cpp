@@ -63,6 +63,7 @@ VoEstimator::VoEstimator(const BackendConfig& config, const StereoRig& rig)
       landmarks_(config_.max_landmarks),
       optimizer_(config_, model_) {
   scratch_landmarks_.reserve(static_cast<std::size_t>(config_.max_landmarks));
+  frame_verdicts_.resize(static_cast<std::size_t>(config_.max_landmarks));
   reset();
 }
 
@@ -120,23 +121,44 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
   return true;
 }
 
-int VoEstimator::removeFrameOutliers(int frame, double threshold_px) {
-  int removed = 0;
+int VoEstimator::removeFrameOutliers(int frame) {
+  constexpr std::uint8_t kJudged = 16;
   const std::uint32_t bits = frameBits(frame);
   const backend::WindowPoses poses = model_.windowPoses(window_);
-  for (int k = static_cast<int>(landmarks_.alive().size()) - 1; k >= 0; --k) {
-    const int i = landmarks_.alive()[static_cast<std::size_t>(k)];
-    Landmark& lm = landmarks_[i];
+  const std::vector<int>& alive = landmarks_.alive();
+  int judged = 0, beyond = 0;
+  for (std::size_t k = 0; k < alive.size(); ++k) {
+    std::uint8_t& verdict = frame_verdicts_[k];
+    verdict = 0;
+    const Landmark& lm = landmarks_[alive[k]];
     if (!lm.alive || (lm.mask & bits) == 0 || lm.host == frame) continue;
+    verdict = kJudged;
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     for (int c = 0; c < 2; ++c) {
-      const std::uint32_t bit = 1u << maskBit(frame, c);
-      if ((lm.mask & bit) == 0) continue;
+      if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
+      ++judged;
       Eigen::Vector2d r;
-      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr) || r.norm() > threshold_px) {
-        lm.mask &= ~bit;
-        ++removed;
+      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr)) {
+        verdict |= static_cast<std::uint8_t>(1u << c);
+      } else if (r.norm() > config_.outlier_threshold_px) {
+        verdict |= static_cast<std::uint8_t>(4u << c);
+        ++beyond;
       }
+    }
+  }
+  // Unprojectable views go always; views beyond the threshold only while they are the minority.
+  const std::uint8_t removable = beyond > config_.max_frame_outlier_share * judged ? 3u : 15u;
+  int removed = 0;
+  // Removing a landmark moves the last one of alive() to its position, one already visited.
+  for (std::size_t k = alive.size(); k-- > 0;) {
+    if ((frame_verdicts_[k] & kJudged) == 0) continue;
+    const std::uint8_t verdict = frame_verdicts_[k] & removable;
+    const int i = alive[k];
+    Landmark& lm = landmarks_[i];
+    for (int c = 0; c < 2; ++c) {
+      if ((verdict & (5u << c)) == 0) continue;
+      lm.mask &= ~(1u << maskBit(frame, c));
+      ++removed;
     }
     if (lm.numObs() < 2) landmarks_.remove(i);
   }
@@ -343,7 +365,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   const int n = window_.add(frame, predicted);
   landmarks_.attach(window_, n);
   optimizer_.optimizePose(state(), n);
-  est.num_outliers = removeFrameOutliers(n, config_.outlier_threshold_px);
+  est.num_outliers = removeFrameOutliers(n);
 
   const auto fail = [&](FailureReason reason) -> const PoseEstimate& {
     pending_reset_ = true;

@@ -102,7 +102,7 @@ class VoEstimator {
   // Steps of process().
   bool initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c);
   void dropNonKeyframes(int keep);
-  int removeFrameOutliers(int frame, double threshold_px);
+  int removeFrameOutliers(int frame);
   bool isNewKeyframe(int frame) const;
   int chooseKeyframeToMarginalize(int newest) const;
   void prepareMarginalization(int frame);
@@ -119,6 +119,10 @@ class VoEstimator {
   backend::MarginalizationPrior prior_;
   backend::WindowOptimizer optimizer_;
   std::vector<int> scratch_landmarks_;  // the landmarks marginalised with a keyframe
+  // Per position of landmarks_.alive(): which of the new frame's two views removeFrameOutliers
+  // judged unprojectable (bits 0-1) or beyond the threshold (bits 2-3), and bit 4 for each landmark
+  // the frame sees.
+  std::vector<std::uint8_t> frame_verdicts_;
   int frames_since_kf_ = 0;
 
   bool initialized_ = false;
