@@ -264,10 +264,13 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
     backend::subtractLowerTriangle(A, B, offset, H);
     for (int c = 0; c < kWindowDim; ++c) {
       for (int r = 0; r < kWindowDim; ++r) {
-        const bool in_lower = r >= offset && r < offset + 6 && c >= offset && c < offset + 6 && r >= c;
-        if (in_lower) {
+        const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
+        // The column pairs also reach the entry above the diagonal in each pair: free to change
+        // (never read), everything else above the diagonal and outside the block must stay.
+        const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
+        if (in_block && r >= c) {
           REQUIRE(std::abs(H(r, c) - expected(r, c)) <= kTolerance);
-        } else {
+        } else if (!pair_upper) {
           REQUIRE(H(r, c) == before(r, c));
         }
       }
