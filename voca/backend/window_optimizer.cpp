@@ -285,7 +285,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       for (int k = 0; k < kWindowDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
       for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
         LandmarkLin& L = lin_[static_cast<std::size_t>(k)];
-        if (!state.landmarks[alive[static_cast<std::size_t>(k)]].alive || !L.valid) continue;
+        // linearize() leaves dead landmarks invalid, so the landmark itself (a cache miss each) is not read.
+        if (!L.valid) continue;
         Eigen::Matrix3d H_ll = L.H_ll;
         for (int d = 0; d < 3; ++d) H_ll(d, d) += lambda * std::max(L.H_ll(d, d), 1e-6) + kTinyRegularization;
         L.H_ll_inv = H_ll.inverse();

@@ -31,8 +31,10 @@ struct WindowState {
 // so every column is whole SSE2 packets of two rows; the pairs also reach the three entries just
 // above the diagonal (0,1), (2,3), (4,5), which are left changed and never read. Eigen's packet product
 // sums ((a0 b0 + a1 b1) + a2 b2) as the full block product does, so the entries are the same bit for bit.
-inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A, const Eigen::Matrix<double, 6, 3>& B,
-                                  int offset, WindowMatrix& H) {
+// Always inlined: GCC kept it as a call in the Schur loop, once per landmark and frame.
+[[gnu::always_inline]] inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A,
+                                                         const Eigen::Matrix<double, 6, 3>& B, int offset,
+                                                         WindowMatrix& H) {
   H.block<6, 2>(offset, offset).noalias() -= A * B.topRows<2>().transpose();
   H.block<4, 2>(offset + 2, offset + 2).noalias() -= A.bottomRows<4>() * B.middleRows<2>(2).transpose();
   H.block<2, 2>(offset + 4, offset + 4).noalias() -= A.bottomRows<2>() * B.bottomRows<2>().transpose();
