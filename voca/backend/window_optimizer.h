@@ -27,15 +27,17 @@ struct WindowState {
 
 // H(offset + i, offset + j) -= (A B^T)(i, j) for i >= j: the lower triangle of a diagonal block of the
 // reduced camera system, the only part its LDLT reads (the upper half was a third of the block
-// products formed per landmark). The sum runs in the order of Eigen's lazy product,
-// ((a0 b0 + a1 b1) + a2 b2), so the entries are bit for bit the ones the full block product gives.
-inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A, const Eigen::Matrix<double, 6, 3>& B,
-                                  int offset, WindowMatrix& H) {
-  for (int j = 0; j < 6; ++j) {
-    for (int i = j; i < 6; ++i) {
-      H(offset + i, offset + j) -= A(i, 0) * B(j, 0) + A(i, 1) * B(j, 1) + A(i, 2) * B(j, 2);
-    }
-  }
+// products formed per landmark). It goes in column pairs from the diagonal down, (0,1), (2,3), (4,5),
+// so every column is whole SSE2 packets of two rows; the pairs also reach the three entries just
+// above the diagonal (0,1), (2,3), (4,5), which are left changed and never read. Eigen's packet product
+// sums ((a0 b0 + a1 b1) + a2 b2) as the full block product does, so the entries are the same bit for bit.
+// Always inlined: GCC kept it as a call in the Schur loop, once per landmark and frame.
+[[gnu::always_inline]] inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A,
+                                                         const Eigen::Matrix<double, 6, 3>& B, int offset,
+                                                         WindowMatrix& H) {
+  H.block<6, 2>(offset, offset).noalias() -= A * B.topRows<2>().transpose();
+  H.block<4, 2>(offset + 2, offset + 2).noalias() -= A.bottomRows<4>() * B.middleRows<2>(2).transpose();
+  H.block<2, 2>(offset + 4, offset + 4).noalias() -= A.bottomRows<2>() * B.bottomRows<2>().transpose();
 }
 
 class WindowOptimizer {
