@@ -55,6 +55,16 @@ float sampleWarpedFastest(const float* data, std::ptrdiff_t stride, const PatchP
   return patch_kernels::sampleWarped<simd4::Native>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
 }
 
+// patch_kernels::sampleWarpedMasked in the fastest variant this CPU runs; every variant gives the same bits.
+std::uint64_t sampleWarpedMaskedFastest(const FloatView& image, const PatchPattern& pattern, int n, float c, float s,
+                                        float tx, float ty, const float* keep, float* out) {
+#if VOCA_AVX2_KERNELS
+  static const bool use_avx2 = patch_kernels::avx2Available();
+  if (use_avx2) return patch_kernels::sampleWarpedMaskedAvx2(image, pattern, n, c, s, tx, ty, keep, out);
+#endif
+  return patch_kernels::sampleWarpedMasked<simd4::Native>(image, pattern, n, c, s, tx, ty, keep, out);
+}
+
 // patch_kernels::sampleTemplate in the fastest variant this CPU runs; every variant gives the same bits.
 float sampleTemplateFastest(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
                             float* value, float* d_tx, float* d_ty, float* d_theta) {
@@ -164,8 +174,8 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
     }
     return count;
   }
-  const std::uint64_t sampled = patch_kernels::sampleWarpedMasked<simd4::Native>(target, pattern, n, c, s, tx, ty,
-                                                                                 tmpl.value.data(), residual.data());
+  const std::uint64_t sampled =
+      sampleWarpedMaskedFastest(target, pattern, n, c, s, tx, ty, tmpl.value.data(), residual.data());
   sum = sumInPointOrder(residual, sampled, n);
   count = std::popcount(sampled);
   if (count == 0 || !(sum > 1e-3f * static_cast<float>(count))) return 0;
