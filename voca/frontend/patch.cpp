@@ -252,8 +252,8 @@ void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px
 }
 
 AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
-                       const AlignParams& params, SE2f& T) {
-  for (int level = static_cast<int>(from.size()) - 1; level >= 0; --level) {
+                       const AlignParams& params, SE2f& T, int min_level) {
+  for (int level = static_cast<int>(from.size()) - 1; level >= min_level; --level) {
     const PatchTemplate& tmpl = from[static_cast<std::size_t>(level)];
     if (!tmpl.valid) {
       // A coarse level may lack texture or room near the border: the finer levels still decide.
