@@ -35,12 +35,12 @@ bool squareInside(const FloatView& image, float x, float y, float reach) {
 }
 
 // The sum of the sampled points' values, added one point after the other (the order the per-point
-// samplers used, which the results depend on bit for bit).
+// samplers used, which the results depend on bit for bit). A point not sampled adds +0, which leaves
+// the sum's bits as they are (it starts at +0 and samples are >= 0), without a branch the border's
+// irregular masks would mispredict.
 float sumInPointOrder(const std::array<float, PatchPattern::kMaxSize>& values, std::uint64_t sampled, int n) {
   float sum = 0.f;
-  for (int i = 0; i < n; ++i) {
-    if (((sampled >> i) & 1u) != 0) sum += values[static_cast<std::size_t>(i)];
-  }
+  for (int i = 0; i < n; ++i) sum += ((sampled >> i) & 1u) != 0 ? values[static_cast<std::size_t>(i)] : 0.f;
   return sum;
 }
 
