@@ -133,6 +133,8 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.min_step_px: expected a number in (0, 10], got 0"));
   message = errorFor(R"({"frontend": {"coarse_min_step_px": -1}})");
   CHECK(contains(message, "frontend.coarse_min_step_px"));
+  message = errorFor(R"({"frontend": {"pyramid_levels": 2, "backward_pyramid_levels": 3}})");
+  CHECK(contains(message, "frontend.backward_pyramid_levels: expected an integer in [-1, 2], got 3"));
   // At most the pyramid the plain guess uses; -1 means all of it.
   message = errorFor(R"({"frontend": {"pyramid_levels": 2, "prior_pyramid_levels": 3}})");
   CHECK(contains(message, "frontend.prior_pyramid_levels: expected an integer in [-1, 2], got 3"));

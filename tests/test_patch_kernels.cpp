@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -339,6 +340,51 @@ TEST_CASE("patch kernels: masked warped sampling, native == portable == per-poin
     }
   }
   CHECK(partial > 50);
+}
+
+TEST_CASE("patch kernels: the AVX2 masked warped sampling equals the portable kernel bit for bit") {
+#if VOCA_AVX2_KERNELS
+  if (!kernels::avx2Available()) {
+    MESSAGE("this CPU has no AVX2: the AVX2 kernel is not run (the tracker uses sampleWarpedMasked<Native>)");
+    return;
+  }
+  // Centres from outside the image to inside, so groups of eight fall wholly out, wholly in and
+  // across the border; some template points invalid (-1) as PatchTemplate marks them.
+  const FloatImage image = randomImage(64, 48, 51);
+  const FloatView view = image.view();
+  std::mt19937 rng(53);
+  std::uniform_real_distribution<float> px(-10.f, 74.f), py(-10.f, 58.f), angle(-0.8f, 0.8f), unit(0.f, 1.f);
+  int partial = 0, empty = 0, full = 0;
+  for (const PatchPattern* pattern : {&pattern24(), &pattern52()}) {
+    const int n = pattern->size;
+    for (int trial = 0; trial < 400; ++trial) {
+      const float theta = trial % 4 == 0 ? 0.f : angle(rng), c = std::cos(theta), s = std::sin(theta);
+      const float tx = px(rng), ty = py(rng);
+      std::array<float, PatchPattern::kMaxSize> keep;
+      for (float& v : keep) v = trial % 3 == 0 ? 1.f : (unit(rng) < 0.2f ? -1.f : 0.5f + unit(rng));
+      std::array<float, PatchPattern::kMaxSize> a_out, p_out;
+      a_out.fill(7.f);
+      p_out.fill(7.f);
+      const std::uint64_t a_mask =
+          kernels::sampleWarpedMaskedAvx2(view, *pattern, n, c, s, tx, ty, keep.data(), a_out.data());
+      const std::uint64_t p_mask =
+          kernels::sampleWarpedMasked<simd4::Portable>(view, *pattern, n, c, s, tx, ty, keep.data(), p_out.data());
+      CHECK(a_mask == p_mask);
+      for (int i = 0; i < n; ++i)
+        CHECK(sameBits(a_out[static_cast<std::size_t>(i)], p_out[static_cast<std::size_t>(i)]));
+      const int sampled = std::popcount(p_mask);
+      partial += sampled > 0 && sampled < n;
+      empty += sampled == 0;
+      full += sampled == n;
+    }
+  }
+  // Every kind of group was met.
+  CHECK(partial > 100);
+  CHECK(empty > 10);
+  CHECK(full > 10);
+#else
+  CHECK_FALSE(kernels::avx2Available());
+#endif
 }
 
 TEST_CASE("patch kernels: template normalisation, native == portable == the per-point formula") {

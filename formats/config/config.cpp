@@ -57,6 +57,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_max_residual_px", &FrontendConfig::prior_max_residual_px},
     {"prior_max_qp", &FrontendConfig::prior_max_qp},
     {"prior_pyramid_levels", &FrontendConfig::prior_pyramid_levels},
+    {"backward_pyramid_levels", &FrontendConfig::backward_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},

@@ -61,6 +61,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   pattern_ = patternBySize(config_.pattern);
   num_levels_ = config_.pyramid_levels + 1;
   prior_levels_ = config_.prior_pyramid_levels < 0 ? num_levels_ : config_.prior_pyramid_levels + 1;
+  backward_levels_ = config_.backward_pyramid_levels < 0 ? num_levels_ : config_.backward_pyramid_levels + 1;
   align_.max_iterations = config_.max_iterations;
   align_.min_step_px = static_cast<float>(config_.min_step_px);
   align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
@@ -158,9 +159,16 @@ void KltFrontend::reset() {
 }
 
 bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                               const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked) const {
+                               const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked,
+                               Eigen::Vector2f& fine_start) const {
   SE2f T_forward(0.f, p + flow_guess);
-  if (trackPatch(forward.first(static_cast<std::size_t>(levels)), to, *pattern_, align_, T_forward) !=
+  const std::span<const PatchTemplate> used = forward.first(static_cast<std::size_t>(levels));
+  // Split where the round-trip check starts: the two calls give the same result as one.
+  const int split = std::min(levels, backward_levels_);
+  if (split < levels && trackPatch(used, to, *pattern_, align_, T_forward, split) != AlignStatus::kConverged)
+    return false;
+  fine_start = T_forward.translation();
+  if (trackPatch(used.first(static_cast<std::size_t>(split)), to, *pattern_, align_, T_forward) !=
       AlignStatus::kConverged)
     return false;
   tracked = T_forward.translation();
@@ -168,12 +176,18 @@ bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const Ima
 }
 
 bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                                const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess, int levels,
+                                const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                                const Eigen::Vector2f& fine_start, int levels,
                                 std::span<PatchTemplate> backward) const {
-  // The backward track starts from the negated guess, so a correct prior lands it near p again.
-  SE2f T_backward(0.f, tracked - flow_guess);
+  // The backward track starts from the negated guess, so a correct prior lands it near p again. A
+  // check on fewer levels than the forward track starts where undoing the forward track's coarse
+  // levels would put it: p plus what its finer levels moved.
+  const int split = std::min(levels, backward_levels_);
+  const Eigen::Vector2f start =
+      split < levels ? Eigen::Vector2f(p + (tracked - fine_start)) : Eigen::Vector2f(tracked - flow_guess);
+  SE2f T_backward(0.f, start);
   buildPyramidPatch(to, tracked, *pattern_, backward);  // every level: the next frame's forward templates
-  if (trackPatch(backward.first(static_cast<std::size_t>(levels)), from, *pattern_, align_, T_backward) !=
+  if (trackPatch(backward.first(static_cast<std::size_t>(split)), from, *pattern_, align_, T_backward) !=
       AlignStatus::kConverged)
     return false;
   return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
@@ -182,9 +196,9 @@ bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to
 bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                                const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
                                std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
-  Eigen::Vector2f tracked;
-  if (!trackForward(forward, to, p, flow_guess, levels, tracked)) return false;
-  if (!checkBackward(from, to, p, tracked, flow_guess, levels, backward)) return false;
+  Eigen::Vector2f tracked, fine_start;
+  if (!trackForward(forward, to, p, flow_guess, levels, tracked, fine_start)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, fine_start, levels, backward)) return false;
   result = tracked;
   return true;
 }
@@ -300,8 +314,11 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       // The plain track first, with its round trip. When the prior's forward track agrees with a
       // plain track that passed, the point is kept from the plain track whatever the prior's round
       // trip says, so that one is skipped; the outcome equals running both checks.
-      const bool plain_forward = trackForward(cam.slot(forward_slot), to, p, zero, all_levels, plain_px);
-      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, all_levels, cam.slot(plain_slot));
+      Eigen::Vector2f plain_fine_start, prior_fine_start;
+      const bool plain_forward =
+          trackForward(cam.slot(forward_slot), to, p, zero, all_levels, plain_px, plain_fine_start);
+      plain_ok = plain_forward &&
+                 checkBackward(from, to, p, plain_px, zero, plain_fine_start, all_levels, cam.slot(plain_slot));
       const bool confirmed = plain_ok && agree_radius2 > 0.f && (p + mv - plain_px).squaredNorm() <= agree_radius2;
       ts.prior_confirmed += confirmed && !same_start;
       if (same_start || confirmed) {
@@ -310,10 +327,11 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       } else if (!plain_ok && mv.squaredNorm() < rescue_min2) {
         prior_ok = false;  // it could only rescue the point: too short a vector for that (prior_rescue_min_px)
       } else {
-        const bool prior_forward = trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px);
+        const bool prior_forward =
+            trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px, prior_fine_start);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
-        prior_ok =
-            agree || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_levels, cam.slot(prior_slot)));
+        prior_ok = agree || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_fine_start, prior_levels,
+                                                            cam.slot(prior_slot)));
       }
     } else {
       // The retry of the sequential modes runs only from a different start: from the same one it

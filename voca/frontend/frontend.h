@@ -129,11 +129,14 @@ class KltFrontend {
                     const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
                     std::span<PatchTemplate> backward, Eigen::Vector2f& result) const;
   // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
+  // fine_start: where the forward track's levels below backward_levels_ started (p + flow_guess when
+  // the check runs on every level the forward track ran on).
   bool trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to, const Eigen::Vector2f& p,
-                    const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked) const;
+                    const Eigen::Vector2f& flow_guess, int levels, Eigen::Vector2f& tracked,
+                    Eigen::Vector2f& fine_start) const;
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
-                     const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess, int levels,
-                     std::span<PatchTemplate> backward) const;
+                     const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
+                     const Eigen::Vector2f& fine_start, int levels, std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
@@ -148,7 +151,8 @@ class KltFrontend {
   const PatchPattern* pattern_ = nullptr;
   AlignParams align_;
   int num_levels_ = 0;
-  int prior_levels_ = 0;  // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
+  int prior_levels_ = 0;     // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
+  int backward_levels_ = 0;  // at most this many levels in a round-trip check (backward_pyramid_levels + 1)
   int max_points_ = 0;
   int width_ = 0, height_ = 0;
   std::array<GenericCamera<double>, 2> cameras_model_;

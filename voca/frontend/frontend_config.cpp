@@ -95,6 +95,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
   checkInt(context, "prior_max_qp", c.prior_max_qp, 0, 127);  // H.264's 51, MPEG-2's non-linear scale 112
   checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
+  checkInt(context, "backward_pyramid_levels", c.backward_pyramid_levels, -1, c.pyramid_levels);
   checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
   checkReal(context, "prior_rescue_min_px", c.prior_rescue_min_px, 0.0, 1e6, false);
 }

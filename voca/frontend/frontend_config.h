@@ -87,6 +87,12 @@ struct FrontendConfig {
   // of_then_mv's rescue tracks and the plain guess from the previous position always use
   // pyramid_levels.
   int prior_pyramid_levels = -1;
+  // Pyramid levels above full resolution on which the round-trip check of a track runs; -1 = those of
+  // the forward track (Basalt). With fewer, the check skips the coarse levels: it starts where undoing
+  // the forward track's coarse levels would put it, p plus what the forward track's finer levels
+  // moved, and runs only the finer levels, so the coarse levels' work is done once per track, not
+  // twice (configs/README.md, "Alignment effort").
+  int backward_pyramid_levels = -1;
   // mv_parallel_of: a motion-vector guess that lands within this distance (level-0 pixels) of the
   // plain track's result, which passed its round trip, is taken as agreeing with it and not tracked.
   // Started that close to a minimum the prior track converges to the same one, so running it only

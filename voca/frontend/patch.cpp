@@ -35,12 +35,12 @@ bool squareInside(const FloatView& image, float x, float y, float reach) {
 }
 
 // The sum of the sampled points' values, added one point after the other (the order the per-point
-// samplers used, which the results depend on bit for bit).
+// samplers used, which the results depend on bit for bit). A point not sampled adds +0, which leaves
+// the sum's bits as they are (it starts at +0 and samples are >= 0), without a branch the border's
+// irregular masks would mispredict.
 float sumInPointOrder(const std::array<float, PatchPattern::kMaxSize>& values, std::uint64_t sampled, int n) {
   float sum = 0.f;
-  for (int i = 0; i < n; ++i) {
-    if (((sampled >> i) & 1u) != 0) sum += values[static_cast<std::size_t>(i)];
-  }
+  for (int i = 0; i < n; ++i) sum += ((sampled >> i) & 1u) != 0 ? values[static_cast<std::size_t>(i)] : 0.f;
   return sum;
 }
 
@@ -53,6 +53,16 @@ float sampleWarpedFastest(const float* data, std::ptrdiff_t stride, const PatchP
   if (use_avx2) return patch_kernels::sampleWarpedAvx2(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
 #endif
   return patch_kernels::sampleWarped<simd4::Native>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
+}
+
+// patch_kernels::sampleWarpedMasked in the fastest variant this CPU runs; every variant gives the same bits.
+std::uint64_t sampleWarpedMaskedFastest(const FloatView& image, const PatchPattern& pattern, int n, float c, float s,
+                                        float tx, float ty, const float* keep, float* out) {
+#if VOCA_AVX2_KERNELS
+  static const bool use_avx2 = patch_kernels::avx2Available();
+  if (use_avx2) return patch_kernels::sampleWarpedMaskedAvx2(image, pattern, n, c, s, tx, ty, keep, out);
+#endif
+  return patch_kernels::sampleWarpedMasked<simd4::Native>(image, pattern, n, c, s, tx, ty, keep, out);
 }
 
 // patch_kernels::sampleTemplate in the fastest variant this CPU runs; every variant gives the same bits.
@@ -164,8 +174,8 @@ int patchResidual(const FloatView& target, const PatchTemplate& tmpl, const Patc
     }
     return count;
   }
-  const std::uint64_t sampled = patch_kernels::sampleWarpedMasked<simd4::Native>(target, pattern, n, c, s, tx, ty,
-                                                                                 tmpl.value.data(), residual.data());
+  const std::uint64_t sampled =
+      sampleWarpedMaskedFastest(target, pattern, n, c, s, tx, ty, tmpl.value.data(), residual.data());
   sum = sumInPointOrder(residual, sampled, n);
   count = std::popcount(sampled);
   if (count == 0 || !(sum > 1e-3f * static_cast<float>(count))) return 0;
@@ -242,8 +252,8 @@ void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px
 }
 
 AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
-                       const AlignParams& params, SE2f& T) {
-  for (int level = static_cast<int>(from.size()) - 1; level >= 0; --level) {
+                       const AlignParams& params, SE2f& T, int min_level) {
+  for (int level = static_cast<int>(from.size()) - 1; level >= min_level; --level) {
     const PatchTemplate& tmpl = from[static_cast<std::size_t>(level)];
     if (!tmpl.valid) {
       // A coarse level may lack texture or room near the border: the finer levels still decide.

@@ -131,9 +131,11 @@ void prefetchPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px
 // Coarse-to-fine alignment of prebuilt templates into pyramid `to`: T is initialised by the caller
 // (translation = guessed level-0 position, rotation usually identity) and holds the converged warp in
 // level-0 pixels on success. A coarse level whose template is invalid (no texture or too close to the
-// border at that scale) is skipped; an invalid level-0 template fails.
+// border at that scale) is skipped; an invalid level-0 template fails. With min_level > 0 only the
+// levels from min_level up run (T is then the warp the finer levels would start from): running levels
+// >= k and then levels < k gives the same T as one call over all levels.
 AlignStatus trackPatch(std::span<const PatchTemplate> from, const ImagePyramid& to, const PatchPattern& pattern,
-                       const AlignParams& params, SE2f& T);
+                       const AlignParams& params, SE2f& T, int min_level = 0);
 
 // Coarse-to-fine alignment over pyramids: the template around `from_px` (level-0 pixels) in `from`,
 // the warp T initialised by the caller (translation = guessed level-0 position in `to`, rotation

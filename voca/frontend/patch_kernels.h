@@ -204,14 +204,15 @@ float sampleWarped(const float* data, std::ptrdiff_t stride, const PatchPattern&
 // sampleWarped for a patch that may reach past the image border or hold invalid points: point i is
 // sampled when keep[i] >= 0 (a template value; -1 marks an invalid point) and canSample accepts its
 // warped position. out[i] is its sample, or -1. Returns the points sampled, bit i for point i.
+// Points before `first` (a multiple of four) are left alone.
 template <class V>
 std::uint64_t sampleWarpedMasked(const FloatView& image, const PatchPattern& pattern, int n, float c, float s, float tx,
-                                 float ty, const float* keep, float* out) {
+                                 float ty, const float* keep, float* out, int first = 0) {
   using F = typename V::F;
   const F vc = V::set1(c), vs = V::set1(s), vtx = V::set1(tx), vty = V::set1(ty);
   const F one = V::set1(1.f), zero = V::set1(0.f), invalid = V::set1(-1.f);
   std::uint64_t sampled = 0;
-  for (int i = 0; i < n; i += 4) {
+  for (int i = first; i < n; i += 4) {
     F x, y;
     warpPoints<V>(pattern, i, vc, vs, vtx, vty, x, y);
     const typename V::M inside = V::both(V::lessEqual(zero, V::load(keep + i)), sampleable<V>(image, x, y));

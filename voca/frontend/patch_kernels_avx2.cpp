@@ -179,6 +179,62 @@ namespace {
   return V::sum(total);
 }
 
+// The operations of sampleWarpedMasked<Sse2> (warpPoints, sampleable, bilinear at the substitute
+// cell) on eight lanes, in the same order. Each lane's sample depends on that lane alone, so the
+// values and the sampled bits equal the four-lane kernel's; a group of eight with no lane inside
+// writes -1 without reading, as the four-lane kernel does per group of four.
+[[gnu::target("avx2")]] std::uint64_t sampleWarpedMaskedAvx2(const FloatView& image, const PatchPattern& pattern, int n,
+                                                             float c, float s, float tx, float ty, const float* keep,
+                                                             float* out) {
+  using V = simd4::Sse2;
+  const std::ptrdiff_t stride = image.stride;
+  const __m256 vc = _mm256_set1_ps(c), vs = _mm256_set1_ps(s), vtx = _mm256_set1_ps(tx), vty = _mm256_set1_ps(ty);
+  const __m256 vstride = _mm256_set1_ps(static_cast<float>(stride));
+  const __m256 one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps(), invalid = _mm256_set1_ps(-1.f);
+  const __m256 x_end = _mm256_set1_ps(static_cast<float>(image.width - 2));
+  const __m256 y_end = _mm256_set1_ps(static_cast<float>(image.height - 2));
+  std::uint64_t sampled = 0;
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const __m256 qx = _mm256_loadu_ps(pattern.x.data() + i), qy = _mm256_loadu_ps(pattern.y.data() + i);
+    const __m256 x = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(vc, qx), _mm256_mul_ps(vs, qy)), vtx);
+    const __m256 y = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vs, qx), _mm256_mul_ps(vc, qy)), vty);
+    // Ordered comparisons (false on NaN), as _mm_cmple_ps / _mm_cmplt_ps.
+    const __m256 inside = _mm256_and_ps(
+        _mm256_cmp_ps(zero, _mm256_loadu_ps(keep + i), _CMP_LE_OS),
+        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(one, x, _CMP_LE_OS), _mm256_cmp_ps(one, y, _CMP_LE_OS)),
+                      _mm256_and_ps(_mm256_cmp_ps(x, x_end, _CMP_LT_OS), _mm256_cmp_ps(y, y_end, _CMP_LT_OS))));
+    const auto lanes = static_cast<unsigned>(_mm256_movemask_ps(inside));
+    if (lanes == 0) {
+      _mm256_storeu_ps(out + i, invalid);
+      continue;
+    }
+    sampled |= static_cast<std::uint64_t>(lanes) << i;
+    // A lane outside reads the cell at (1, 1) instead, which exists since some lane is inside.
+    const __m256 sx = _mm256_blendv_ps(one, x, inside), sy = _mm256_blendv_ps(one, y, inside);
+    const __m256 ix = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(sx)), iy = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(sy));
+    const __m256 fx = _mm256_sub_ps(sx, ix), fy = _mm256_sub_ps(sy, iy);
+    alignas(32) std::int32_t offset[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(offset),
+                       _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(iy, vstride), ix)));
+    __m256 top_left, top_right, bottom_left, bottom_right;
+    const float* cell[8];
+    for (int k = 0; k < 8; ++k) cell[k] = image.data + offset[k];
+    gatherPairs8(cell, top_left, top_right);
+    for (auto& p : cell) p += stride;
+    gatherPairs8(cell, bottom_left, bottom_right);
+    const __m256 top = _mm256_add_ps(top_left, _mm256_mul_ps(fx, _mm256_sub_ps(top_right, top_left)));
+    const __m256 bottom = _mm256_add_ps(bottom_left, _mm256_mul_ps(fx, _mm256_sub_ps(bottom_right, bottom_left)));
+    const __m256 v = _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bottom, top)));
+    _mm256_storeu_ps(out + i, _mm256_blendv_ps(invalid, v, inside));
+  }
+  // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel itself.
+  if (i < n) {
+    sampled |= sampleWarpedMasked<V>(image, pattern, n, c, s, tx, ty, keep, out, i);
+  }
+  return sampled;
+}
+
 #else
 
 bool avx2Available() { return false; }

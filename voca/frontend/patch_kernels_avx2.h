@@ -1,12 +1,13 @@
 #pragma once
 // AVX2 variants of the KLT's hottest loops (patch_kernels::sampleWarped, about 40 % of the
-// frontend's time, and sampleTemplate), eight pattern points per step, chosen at run time on x86-64 CPUs that have AVX2
-// while the rest of the build stays at the SSE2 baseline. It keeps the four-lane accumulators and
-// adds each half of an eight-lane step to them in point order, so its results equal the SSE2, NEON
-// and portable kernels' bit for bit (tests/test_patch_kernels.cpp).
+// frontend's time, sampleWarpedMasked near borders, and sampleTemplate), eight pattern points per step, chosen at run
+// time on x86-64 CPUs that have AVX2 while the rest of the build stays at the SSE2 baseline. It keeps the four-lane
+// accumulators and adds each half of an eight-lane step to them in point order, so its results equal the SSE2, NEON and
+// portable kernels' bit for bit (tests/test_patch_kernels.cpp).
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 
 #include "voca/frontend/patch.h"
 
@@ -27,6 +28,9 @@ bool avx2Available();
 float sampleWarpedAvx2(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c, float s,
                        float tx, float ty, float* out, const std::array<float, PatchPattern::kMaxSize>* step,
                        float* dots);
+// sampleWarpedMasked<V>, same arguments and results (the values and the sampled bits).
+std::uint64_t sampleWarpedMaskedAvx2(const FloatView& image, const PatchPattern& pattern, int n, float c, float s,
+                                     float tx, float ty, const float* keep, float* out);
 float sampleTemplateAvx2(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
                          float* value, float* d_tx, float* d_ty, float* d_theta);
 #endif
