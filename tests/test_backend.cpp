@@ -428,6 +428,35 @@ TEST_CASE("backend: a new frame that mostly disagrees with its pose guess keeps 
   }
 }
 
+TEST_CASE("backend: max_frames_after_kf bounds the gap between keyframes, and the trajectory stays exact") {
+  const StereoRig rig = synth::eurocRig();
+  const SyntheticObservations seq = shortNoiseFreeSequence(rig);
+  for (const int max_gap : {0, 4}) {
+    BackendConfig config;
+    config.max_frames_after_kf = max_gap;
+    VoEstimator estimator(config, rig);
+    std::vector<SE3d> poses;
+    int longest_gap = 0, since_keyframe = 0, keyframes = 0;
+    for (const TrackedStereoFrame& f : seq.frames) {
+      const PoseEstimate& e = estimator.process(f);
+      poses.push_back(e.T_world_body);
+      since_keyframe = e.keyframe ? 0 : since_keyframe + 1;
+      keyframes += e.keyframe;
+      longest_gap = std::max(longest_gap, since_keyframe);
+    }
+    const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
+    MESSAGE("max_frames_after_kf " << max_gap << ": " << keyframes << " keyframes, longest run without one "
+                                   << longest_gap << " frames, max error " << max_t * 1000 << " mm");
+    if (max_gap == 0) {
+      CHECK(longest_gap >= 4);  // the bound below is not met by chance
+    } else {
+      CHECK(longest_gap < max_gap);
+    }
+    CHECK(max_t < 1e-3);
+    CHECK(max_r < 0.01);
+  }
+}
+
 TEST_CASE("backend: LM judges steps by the plain cost, and the window's cost never rises over iterations") {
   // LM judges each step by the cost that the next linearisation computes along the way: it must be
   // the plain cost pass (optimizeWindow(0)) to the bit, or a step that raises the true cost could

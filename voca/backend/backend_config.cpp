@@ -14,6 +14,7 @@ using Field = ConfigField<BackendConfig>;
 const Field kFields[] = {
     {"max_keyframes", &BackendConfig::max_keyframes, 2, kMaxWindowFrames - 1},
     {"min_frames_after_kf", &BackendConfig::min_frames_after_kf, 0, 1000},
+    {"max_frames_after_kf", &BackendConfig::max_frames_after_kf, 0, 100000},
     {"new_kf_keypoints_thresh", &BackendConfig::new_kf_keypoints_thresh, 0.0, 1.0},
     {"kf_marg_feature_ratio", &BackendConfig::kf_marg_feature_ratio, 0.0, 1.0},
     {"rehost_landmarks", &BackendConfig::rehost_landmarks},

@@ -12,8 +12,12 @@ inline constexpr int kMaxWindowFrames = 10;
 
 struct BackendConfig {
   // Window and keyframes.
-  int max_keyframes = 7;                 // vio_max_kfs (at most kMaxWindowFrames - 1)
-  int min_frames_after_kf = 1;           // vio_min_frames_after_kf
+  int max_keyframes = 7;        // vio_max_kfs (at most kMaxWindowFrames - 1)
+  int min_frames_after_kf = 1;  // vio_min_frames_after_kf
+  // A keyframe at least every this many frames (0 = only when tracks need one, as Basalt). Where
+  // tracks live long (flying backwards, a slow pan) the window's keyframes would otherwise grow old
+  // while every new frame hangs on landmarks fixed in them by tracks that drift with each frame.
+  int max_frames_after_kf = 0;
   double new_kf_keypoints_thresh = 0.8;  // vio_new_kf_keypoints_thresh: keyframe when connected / tracked < this
   double kf_marg_feature_ratio = 0.2;    // vio_kf_marg_feature_ratio: marginalise a keyframe whose landmarks are lost
   // Landmarks hosted in a marginalised keyframe that the newest frame still tracks: false

@@ -176,6 +176,7 @@ bool VoEstimator::isNewKeyframe(int frame) const {
   // Too few connected points to keep tracking: triangulate now whatever the frame count says.
   if (connected < 2 * config_.min_inliers) return true;
   const double ratio = total > 0 ? static_cast<double>(connected) / total : 0.0;
+  if (config_.max_frames_after_kf > 0 && frames_since_kf_ >= config_.max_frames_after_kf) return true;
   return ratio < config_.new_kf_keypoints_thresh && frames_since_kf_ > config_.min_frames_after_kf;
 }
 
