@@ -53,6 +53,35 @@ namespace {
   out[3] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
+// warpPoints<Sse2> on eight lanes: the pattern's points i..i+7 rotated by (c, s) and moved by (tx, ty).
+[[gnu::target("avx2"), gnu::always_inline]] inline void warpPoints8(const PatchPattern& pattern, int i, __m256 vc,
+                                                                    __m256 vs, __m256 vtx, __m256 vty, __m256& x,
+                                                                    __m256& y) {
+  const __m256 qx = _mm256_loadu_ps(pattern.x.data() + i), qy = _mm256_loadu_ps(pattern.y.data() + i);
+  x = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(vc, qx), _mm256_mul_ps(vs, qy)), vtx);
+  y = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vs, qx), _mm256_mul_ps(vc, qy)), vty);
+}
+
+// bilinear<Sse2> on eight lanes, in the same order: cell offsets, the two rows' pairs, then x, then y.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256 bilinear8(const float* data, std::ptrdiff_t stride, __m256 x,
+                                                                    __m256 y) {
+  const __m256 ix = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(x)), iy = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(y));
+  const __m256 fx = _mm256_sub_ps(x, ix), fy = _mm256_sub_ps(y, iy);
+  alignas(32) std::int32_t offset[8];
+  _mm256_store_si256(
+      reinterpret_cast<__m256i*>(offset),
+      _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(iy, _mm256_set1_ps(static_cast<float>(stride))), ix)));
+  __m256 top_left, top_right, bottom_left, bottom_right;
+  const float* cell[8];
+  for (int k = 0; k < 8; ++k) cell[k] = data + offset[k];
+  gatherPairs8(cell, top_left, top_right);
+  for (auto& p : cell) p += stride;
+  gatherPairs8(cell, bottom_left, bottom_right);
+  const __m256 top = _mm256_add_ps(top_left, _mm256_mul_ps(fx, _mm256_sub_ps(top_right, top_left)));
+  const __m256 bottom = _mm256_add_ps(bottom_left, _mm256_mul_ps(fx, _mm256_sub_ps(bottom_right, bottom_left)));
+  return _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bottom, top)));
+}
+
 }  // namespace
 
 // The operations of sampleTemplate<Sse2> (valueAndGradient, thetaDerivative) on eight lanes, in the same order.
@@ -129,27 +158,12 @@ namespace {
                                                const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
   using V = simd4::Sse2;
   const __m256 vc = _mm256_set1_ps(c), vs = _mm256_set1_ps(s), vtx = _mm256_set1_ps(tx), vty = _mm256_set1_ps(ty);
-  const __m256 vstride = _mm256_set1_ps(static_cast<float>(stride));
   __m128 total = _mm_setzero_ps(), dot0 = total, dot1 = total, dot2 = total;
   int i = 0;
   for (; i + 8 <= n; i += 8) {
-    const __m256 qx = _mm256_loadu_ps(pattern.x.data() + i), qy = _mm256_loadu_ps(pattern.y.data() + i);
-    const __m256 x = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(vc, qx), _mm256_mul_ps(vs, qy)), vtx);
-    const __m256 y = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vs, qx), _mm256_mul_ps(vc, qy)), vty);
-    const __m256 ix = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(x)), iy = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(y));
-    const __m256 fx = _mm256_sub_ps(x, ix), fy = _mm256_sub_ps(y, iy);
-    alignas(32) std::int32_t offset[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(offset),
-                       _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(iy, vstride), ix)));
-    __m256 top_left, top_right, bottom_left, bottom_right;
-    const float* cell[8];
-    for (int k = 0; k < 8; ++k) cell[k] = data + offset[k];
-    gatherPairs8(cell, top_left, top_right);
-    for (auto& p : cell) p += stride;
-    gatherPairs8(cell, bottom_left, bottom_right);
-    const __m256 top = _mm256_add_ps(top_left, _mm256_mul_ps(fx, _mm256_sub_ps(top_right, top_left)));
-    const __m256 bottom = _mm256_add_ps(bottom_left, _mm256_mul_ps(fx, _mm256_sub_ps(bottom_right, bottom_left)));
-    const __m256 v = _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bottom, top)));
+    __m256 x, y;
+    warpPoints8(pattern, i, vc, vs, vtx, vty, x, y);
+    const __m256 v = bilinear8(data, stride, x, y);
     if (out != nullptr) _mm256_storeu_ps(out + i, v);
     if (step != nullptr) {
       dot0 = addHalves(dot0, _mm256_mul_ps(_mm256_loadu_ps(step[0].data() + i), v));
@@ -189,16 +203,14 @@ namespace {
   using V = simd4::Sse2;
   const std::ptrdiff_t stride = image.stride;
   const __m256 vc = _mm256_set1_ps(c), vs = _mm256_set1_ps(s), vtx = _mm256_set1_ps(tx), vty = _mm256_set1_ps(ty);
-  const __m256 vstride = _mm256_set1_ps(static_cast<float>(stride));
   const __m256 one = _mm256_set1_ps(1.f), zero = _mm256_setzero_ps(), invalid = _mm256_set1_ps(-1.f);
   const __m256 x_end = _mm256_set1_ps(static_cast<float>(image.width - 2));
   const __m256 y_end = _mm256_set1_ps(static_cast<float>(image.height - 2));
   std::uint64_t sampled = 0;
   int i = 0;
   for (; i + 8 <= n; i += 8) {
-    const __m256 qx = _mm256_loadu_ps(pattern.x.data() + i), qy = _mm256_loadu_ps(pattern.y.data() + i);
-    const __m256 x = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(vc, qx), _mm256_mul_ps(vs, qy)), vtx);
-    const __m256 y = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(vs, qx), _mm256_mul_ps(vc, qy)), vty);
+    __m256 x, y;
+    warpPoints8(pattern, i, vc, vs, vtx, vty, x, y);
     // Ordered comparisons (false on NaN), as _mm_cmple_ps / _mm_cmplt_ps.
     const __m256 inside = _mm256_and_ps(
         _mm256_cmp_ps(zero, _mm256_loadu_ps(keep + i), _CMP_LE_OS),
@@ -212,20 +224,7 @@ namespace {
     sampled |= static_cast<std::uint64_t>(lanes) << i;
     // A lane outside reads the cell at (1, 1) instead, which exists since some lane is inside.
     const __m256 sx = _mm256_blendv_ps(one, x, inside), sy = _mm256_blendv_ps(one, y, inside);
-    const __m256 ix = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(sx)), iy = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(sy));
-    const __m256 fx = _mm256_sub_ps(sx, ix), fy = _mm256_sub_ps(sy, iy);
-    alignas(32) std::int32_t offset[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(offset),
-                       _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(iy, vstride), ix)));
-    __m256 top_left, top_right, bottom_left, bottom_right;
-    const float* cell[8];
-    for (int k = 0; k < 8; ++k) cell[k] = image.data + offset[k];
-    gatherPairs8(cell, top_left, top_right);
-    for (auto& p : cell) p += stride;
-    gatherPairs8(cell, bottom_left, bottom_right);
-    const __m256 top = _mm256_add_ps(top_left, _mm256_mul_ps(fx, _mm256_sub_ps(top_right, top_left)));
-    const __m256 bottom = _mm256_add_ps(bottom_left, _mm256_mul_ps(fx, _mm256_sub_ps(bottom_right, bottom_left)));
-    const __m256 v = _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bottom, top)));
+    const __m256 v = bilinear8(image.data, stride, sx, sy);
     _mm256_storeu_ps(out + i, _mm256_blendv_ps(invalid, v, inside));
   }
   // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel itself.
