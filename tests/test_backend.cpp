@@ -50,6 +50,8 @@ ViewConfig randomViewConfig(std::mt19937& rng, int trial) {
 struct RunResult {
   std::vector<SE3d> T_world_body;
   int resets = 0, lost = 0, keyframes = 0;
+  int longest_keyframe_gap = 0;  // most frames in a row without a keyframe
+  int most_views_culled = 0;     // frames whose outlier cull removed over half of their views
   double max_prior_asymmetry = 0.0;
   double min_prior_eigenvalue = 0.0;
   double max_prior_eigenvalue = 0.0;
@@ -59,12 +61,18 @@ RunResult run(const StereoRig& rig, const SyntheticObservations& seq, const Back
               bool check_prior = false) {
   VoEstimator estimator(config, rig);
   RunResult result;
+  int since_keyframe = 0;
   for (std::size_t k = 0; k < seq.frames.size(); ++k) {
-    const PoseEstimate& e = estimator.process(seq.frames[k]);
+    const TrackedStereoFrame& f = seq.frames[k];
+    const PoseEstimate& e = estimator.process(f);
     result.T_world_body.push_back(e.T_world_body);
     result.resets += e.state == TrackingState::kReset;
     result.lost += e.state == TrackingState::kLost;
     result.keyframes += e.keyframe;
+    since_keyframe = e.keyframe ? 0 : since_keyframe + 1;
+    result.longest_keyframe_gap = std::max(result.longest_keyframe_gap, since_keyframe);
+    const std::size_t views = f.observations[0].size() + f.observations[1].size();
+    result.most_views_culled += 2 * static_cast<std::size_t>(e.num_outliers) > views;
     if (check_prior && k % 25 == 24) {
       const Eigen::MatrixXd H = estimator.priorHessian();
       const double scale = std::max(1.0, H.cwiseAbs().maxCoeff());
@@ -400,28 +408,18 @@ TEST_CASE("backend: a new frame that mostly disagrees with its pose guess keeps 
     BackendConfig config;
     config.pose_only_iterations = 0;
     config.max_frame_outlier_share = share;
-    VoEstimator estimator(config, rig);
-    std::vector<SE3d> poses;
-    int resets = 0, lost = 0, most_views_culled = 0;
-    for (const TrackedStereoFrame& f : seq.frames) {
-      const PoseEstimate& e = estimator.process(f);
-      poses.push_back(e.T_world_body);
-      resets += e.state == TrackingState::kReset;
-      lost += e.state == TrackingState::kLost;
-      const std::size_t views = f.observations[0].size() + f.observations[1].size();
-      most_views_culled += 2 * static_cast<std::size_t>(e.num_outliers) > views;
-    }
-    const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
-    MESSAGE("share " << share << ": " << most_views_culled << " frames lost most views to the cull, " << lost
-                     << " lost, " << resets << " resets, max error " << max_t * 1000 << " mm, " << max_r << " deg");
+    const RunResult r = run(rig, seq, config);
+    const auto [max_t, max_r] = maxPoseError(r.T_world_body, seq.T_world_body);
+    MESSAGE("share " << share << ": " << r.most_views_culled << " frames lost most views to the cull, " << r.lost
+                     << " lost, " << r.resets << " resets, max error " << max_t * 1000 << " mm, " << max_r << " deg");
     if (share == 1.0) {
       // Basalt's cull: the frame keeps too few views and tracking breaks.
-      CHECK(most_views_culled > 0);
-      CHECK(resets > 0);
+      CHECK(r.most_views_culled > 0);
+      CHECK(r.resets > 0);
     } else {
-      CHECK(most_views_culled == 0);
-      CHECK(lost == 0);
-      CHECK(resets == 0);
+      CHECK(r.most_views_culled == 0);
+      CHECK(r.lost == 0);
+      CHECK(r.resets == 0);
       CHECK(max_t < 1e-3);  // the bounds of the run with the pose-only step
       CHECK(max_r < 0.01);
     }
@@ -434,23 +432,14 @@ TEST_CASE("backend: max_frames_after_kf bounds the gap between keyframes, and th
   for (const int max_gap : {0, 4}) {
     BackendConfig config;
     config.max_frames_after_kf = max_gap;
-    VoEstimator estimator(config, rig);
-    std::vector<SE3d> poses;
-    int longest_gap = 0, since_keyframe = 0, keyframes = 0;
-    for (const TrackedStereoFrame& f : seq.frames) {
-      const PoseEstimate& e = estimator.process(f);
-      poses.push_back(e.T_world_body);
-      since_keyframe = e.keyframe ? 0 : since_keyframe + 1;
-      keyframes += e.keyframe;
-      longest_gap = std::max(longest_gap, since_keyframe);
-    }
-    const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
-    MESSAGE("max_frames_after_kf " << max_gap << ": " << keyframes << " keyframes, longest run without one "
-                                   << longest_gap << " frames, max error " << max_t * 1000 << " mm");
+    const RunResult r = run(rig, seq, config);
+    const auto [max_t, max_r] = maxPoseError(r.T_world_body, seq.T_world_body);
+    MESSAGE("max_frames_after_kf " << max_gap << ": " << r.keyframes << " keyframes, longest run without one "
+                                   << r.longest_keyframe_gap << " frames, max error " << max_t * 1000 << " mm");
     if (max_gap == 0) {
-      CHECK(longest_gap >= 4);  // the bound below is not met by chance
+      CHECK(r.longest_keyframe_gap >= 4);  // the bound below is not met by chance
     } else {
-      CHECK(longest_gap < max_gap);
+      CHECK(r.longest_keyframe_gap < max_gap);
     }
     CHECK(max_t < 1e-3);
     CHECK(max_r < 0.01);
