@@ -51,20 +51,17 @@ template <class V>
   return V::sub(V::mul(gy, qx), V::mul(gx, qy));
 }
 
-// Samples the pattern around base (the pixel at the integer part of the patch centre; every point
-// and its gradient neighbourhood inside the image) with the bilinear weights of the fractional part
-// (fx, fy), which all points share because pattern offsets are integers. Writes the intensity and
-// the derivatives of intensity with respect to (tx, ty, theta) of the warp; returns the sum of the
-// intensities. The gradient is the central difference at the four cell corners, interpolated with
-// the same weights (see sampleWithGradient).
+// sampleTemplate's loop from point `first` (a multiple of four) on, adding the samples to total: the
+// AVX2 kernel runs the group of four its groups of eight leave through this same loop.
 template <class V>
-float sampleTemplate(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
-                     float* value, float* d_tx, float* d_ty, float* d_theta) {
+[[gnu::always_inline]] inline void accumulateTemplate(const float* base, std::ptrdiff_t stride,
+                                                      const PatchPattern& pattern, int first, float fx, float fy,
+                                                      float* value, float* d_tx, float* d_ty, float* d_theta,
+                                                      typename V::F& total) {
   using F = typename V::F;
   const F w00 = V::set1((1.f - fx) * (1.f - fy)), w10 = V::set1(fx * (1.f - fy));
   const F w01 = V::set1((1.f - fx) * fy), w11 = V::set1(fx * fy);
-  F total = V::set1(0.f);
-  for (int i = 0; i < pattern.size; i += 4) {
+  for (int i = first; i < pattern.size; i += 4) {
     const float* row0[4];  // top-left pixel of each point's bilinear cell
     for (int k = 0; k < 4; ++k) {
       const auto j = static_cast<std::size_t>(i + k);
@@ -79,6 +76,19 @@ float sampleTemplate(const float* base, std::ptrdiff_t stride, const PatchPatter
     V::store(d_theta + i, thetaDerivative<V>(gx, gy, qx, qy));
     total = V::add(total, v);
   }
+}
+
+// Samples the pattern around base (the pixel at the integer part of the patch centre; every point
+// and its gradient neighbourhood inside the image) with the bilinear weights of the fractional part
+// (fx, fy), which all points share because pattern offsets are integers. Writes the intensity and
+// the derivatives of intensity with respect to (tx, ty, theta) of the warp; returns the sum of the
+// intensities. The gradient is the central difference at the four cell corners, interpolated with
+// the same weights (see sampleWithGradient).
+template <class V>
+float sampleTemplate(const float* base, std::ptrdiff_t stride, const PatchPattern& pattern, float fx, float fy,
+                     float* value, float* d_tx, float* d_ty, float* d_theta) {
+  typename V::F total = V::set1(0.f);
+  accumulateTemplate<V>(base, stride, pattern, 0, fx, fy, value, d_tx, d_ty, d_theta, total);
   return V::sum(total);
 }
 
@@ -172,33 +182,57 @@ template <class V>
   y = V::add(V::add(V::mul(s, qx), V::mul(c, qy)), ty);
 }
 
+// Running sums of sampleWarped, one lane per point position in a group of four.
+template <class V>
+struct WarpedSums {
+  typename V::F total = V::set1(0.f), dot0 = total, dot1 = total, dot2 = total;
+};
+
+// sampleWarped's loop from point `first` (a multiple of four) on, adding to sums: the AVX2 kernel
+// runs the groups of four its groups of eight leave through this same loop.
+template <class V>
+[[gnu::always_inline]] inline void accumulateWarped(const float* data, std::ptrdiff_t stride,
+                                                    const PatchPattern& pattern, int first, int n, float c, float s,
+                                                    float tx, float ty, float* out,
+                                                    const std::array<float, PatchPattern::kMaxSize>* step,
+                                                    WarpedSums<V>& sums) {
+  using F = typename V::F;
+  const F vc = V::set1(c), vs = V::set1(s), vtx = V::set1(tx), vty = V::set1(ty);
+  for (int i = first; i < n; i += 4) {
+    F x, y;
+    warpPoints<V>(pattern, i, vc, vs, vtx, vty, x, y);
+    const F v = bilinear<V>(data, stride, x, y);
+    if (out != nullptr) V::store(out + i, v);
+    if (step != nullptr) {
+      sums.dot0 = V::add(sums.dot0, V::mul(V::load(step[0].data() + i), v));
+      sums.dot1 = V::add(sums.dot1, V::mul(V::load(step[1].data() + i), v));
+      sums.dot2 = V::add(sums.dot2, V::mul(V::load(step[2].data() + i), v));
+    }
+    sums.total = V::add(sums.total, v);
+  }
+}
+
+// The lane sums of `sums`: dots[r] when step is not null; returns the sum of the samples.
+template <class V>
+[[gnu::always_inline]] inline float finishWarped(const WarpedSums<V>& sums,
+                                                 const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
+  if (step != nullptr) {
+    dots[0] = V::sum(sums.dot0);
+    dots[1] = V::sum(sums.dot1);
+    dots[2] = V::sum(sums.dot2);
+  }
+  return V::sum(sums.total);
+}
+
 // Bilinear samples of the pattern under the warp q -> R q + t, R = [c -s; s c], all points inside
 // the image with their 2x2 cells (canSample). Writes the samples to out when it is not null and
 // returns their sum; when step is not null, also accumulates dots[r] = sum_i step[r][i] sample_i.
 template <class V>
 float sampleWarped(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c, float s,
                    float tx, float ty, float* out, const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
-  using F = typename V::F;
-  const F vc = V::set1(c), vs = V::set1(s), vtx = V::set1(tx), vty = V::set1(ty);
-  F total = V::set1(0.f), dot0 = total, dot1 = total, dot2 = total;
-  for (int i = 0; i < n; i += 4) {
-    F x, y;
-    warpPoints<V>(pattern, i, vc, vs, vtx, vty, x, y);
-    const F v = bilinear<V>(data, stride, x, y);
-    if (out != nullptr) V::store(out + i, v);
-    if (step != nullptr) {
-      dot0 = V::add(dot0, V::mul(V::load(step[0].data() + i), v));
-      dot1 = V::add(dot1, V::mul(V::load(step[1].data() + i), v));
-      dot2 = V::add(dot2, V::mul(V::load(step[2].data() + i), v));
-    }
-    total = V::add(total, v);
-  }
-  if (step != nullptr) {
-    dots[0] = V::sum(dot0);
-    dots[1] = V::sum(dot1);
-    dots[2] = V::sum(dot2);
-  }
-  return V::sum(total);
+  WarpedSums<V> sums;
+  accumulateWarped<V>(data, stride, pattern, 0, n, c, s, tx, ty, out, step, sums);
+  return finishWarped<V>(sums, step, dots);
 }
 
 // sampleWarped for a patch that may reach past the image border or hold invalid points: point i is

@@ -133,22 +133,8 @@ namespace {
     _mm256_storeu_ps(d_theta + i, _mm256_sub_ps(_mm256_mul_ps(gy, qx), _mm256_mul_ps(gx, qy)));
     total = addHalves(total, v);
   }
-  // A last group of four as sampleTemplate<Sse2> does it.
-  for (; i < pattern.size; i += 4) {
-    const float* row0[4];
-    for (int k = 0; k < 4; ++k) {
-      const auto j = static_cast<std::size_t>(i + k);
-      row0[k] = base + static_cast<std::ptrdiff_t>(pattern.y[j]) * stride + static_cast<std::ptrdiff_t>(pattern.x[j]);
-    }
-    __m128 v, gx, gy;
-    valueAndGradient<V>(row0, stride, V::set1(w00_s), V::set1(w10_s), V::set1(w01_s), V::set1(w11_s), v, gx, gy);
-    const __m128 qx = V::load(pattern.x.data() + i), qy = V::load(pattern.y.data() + i);
-    V::store(value + i, v);
-    V::store(d_tx + i, gx);
-    V::store(d_ty + i, gy);
-    V::store(d_theta + i, thetaDerivative<V>(gx, gy, qx, qy));
-    total = V::add(total, v);
-  }
+  // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel's own loop.
+  accumulateTemplate<V>(base, stride, pattern, i, fx, fy, value, d_tx, d_ty, d_theta, total);
   return V::sum(total);
 }
 
@@ -158,7 +144,7 @@ namespace {
                                                const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
   using V = simd4::Sse2;
   const __m256 vc = _mm256_set1_ps(c), vs = _mm256_set1_ps(s), vtx = _mm256_set1_ps(tx), vty = _mm256_set1_ps(ty);
-  __m128 total = _mm_setzero_ps(), dot0 = total, dot1 = total, dot2 = total;
+  WarpedSums<V> sums;
   int i = 0;
   for (; i + 8 <= n; i += 8) {
     __m256 x, y;
@@ -166,31 +152,15 @@ namespace {
     const __m256 v = bilinear8(data, stride, x, y);
     if (out != nullptr) _mm256_storeu_ps(out + i, v);
     if (step != nullptr) {
-      dot0 = addHalves(dot0, _mm256_mul_ps(_mm256_loadu_ps(step[0].data() + i), v));
-      dot1 = addHalves(dot1, _mm256_mul_ps(_mm256_loadu_ps(step[1].data() + i), v));
-      dot2 = addHalves(dot2, _mm256_mul_ps(_mm256_loadu_ps(step[2].data() + i), v));
+      sums.dot0 = addHalves(sums.dot0, _mm256_mul_ps(_mm256_loadu_ps(step[0].data() + i), v));
+      sums.dot1 = addHalves(sums.dot1, _mm256_mul_ps(_mm256_loadu_ps(step[1].data() + i), v));
+      sums.dot2 = addHalves(sums.dot2, _mm256_mul_ps(_mm256_loadu_ps(step[2].data() + i), v));
     }
-    total = addHalves(total, v);
+    sums.total = addHalves(sums.total, v);
   }
-  // A last group of four (52 = 6 * 8 + 4) as sampleWarped<Sse2> does it.
-  for (; i < n; i += 4) {
-    __m128 x, y;
-    warpPoints<V>(pattern, i, V::set1(c), V::set1(s), V::set1(tx), V::set1(ty), x, y);
-    const __m128 v = bilinear<V>(data, stride, x, y);
-    if (out != nullptr) V::store(out + i, v);
-    if (step != nullptr) {
-      dot0 = V::add(dot0, V::mul(V::load(step[0].data() + i), v));
-      dot1 = V::add(dot1, V::mul(V::load(step[1].data() + i), v));
-      dot2 = V::add(dot2, V::mul(V::load(step[2].data() + i), v));
-    }
-    total = V::add(total, v);
-  }
-  if (step != nullptr) {
-    dots[0] = V::sum(dot0);
-    dots[1] = V::sum(dot1);
-    dots[2] = V::sum(dot2);
-  }
-  return V::sum(total);
+  // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel's own loop.
+  accumulateWarped<V>(data, stride, pattern, i, n, c, s, tx, ty, out, step, sums);
+  return finishWarped<V>(sums, step, dots);
 }
 
 // The operations of sampleWarpedMasked<Sse2> (warpPoints, sampleable, bilinear at the substitute
