@@ -84,10 +84,11 @@ void encode(const std::filesystem::path& path, const std::vector<GrayImage>& fra
 }
 
 std::vector<DecodedFrame> decodeAll(const std::filesystem::path& path, std::vector<std::int64_t> t_ns = {},
-                                    bool skip_loop_filter = false, bool export_qp = true) {
+                                    bool skip_loop_filter = false, bool export_qp = true, bool luma_only = true) {
   voca::decode::DecoderOptions options;
   options.kind = voca::decode::DecoderKind::kSoftware;
   options.skip_loop_filter = skip_loop_filter;
+  options.luma_only = luma_only;
   options.export_qp = export_qp;
   voca::decode::VideoReader reader(path, std::move(t_ns), options);
   std::vector<DecodedFrame> frames;
@@ -218,6 +219,43 @@ TEST_CASE("skipping the deblocking filter keeps the vectors exact and changes on
   // The option is real: the filter changed pixels that the unfiltered decode leaves as they were.
   MESSAGE("skip-deblock: " << differing_pixels << " pixels differ over " << kFrames << " frames");
   CHECK(differing_pixels > 0);
+}
+
+TEST_CASE("luma-only decoding gives the luma planes and vectors of a decode with chroma") {
+  voca::test::ScratchDir dir("decode-luma-only");
+  const WaveTexture texture(9);
+  const Motion motion = [](const Eigen::Vector2d& p, int k) {
+    return Eigen::Vector2d(p.x() - 1.25 * k, p.y() + 0.5 * k);
+  };
+  const std::vector<GrayImage> truth = render(texture, motion);
+  // The skipped chroma planes must not reach the luma: H.264 (with its deblocking filter, at a rate
+  // low enough for the filter to act) and MPEG-2, whose decoders both honour the flag.
+  for (const std::string codec : {"libx264", "mpeg2video"}) {
+    CAPTURE(codec);
+    const std::filesystem::path path = dir / (codec + ".mp4");
+    encode(path, truth, codec, /*two_pass=*/false, 200000);
+    const std::vector<DecodedFrame> with_chroma = decodeAll(path, {}, false, false, /*luma_only=*/false);
+    const std::vector<DecodedFrame> luma_only = decodeAll(path, {}, false, false, /*luma_only=*/true);
+    REQUIRE(with_chroma.size() == luma_only.size());
+    REQUIRE(with_chroma.size() >= std::size_t(kFrames - 1));
+    for (std::size_t k = 0; k < with_chroma.size(); ++k) {
+      CAPTURE(k);
+      REQUIRE(luma_only[k].luma.width() == kWidth);
+      REQUIRE(luma_only[k].luma.height() == kHeight);
+      int differing = 0;
+      for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x) differing += with_chroma[k].luma(x, y) != luma_only[k].luma(x, y) ? 1 : 0;
+      CHECK(differing == 0);
+      const auto a = with_chroma[k].motion.blocks(), b = luma_only[k].motion.blocks();
+      REQUIRE(a.size() == b.size());
+      for (std::size_t i = 0; i < a.size(); ++i) CHECK((a[i].dx == b[i].dx && a[i].dy == b[i].dy));
+    }
+  }
+  const char* what = voca::decode::lumaOnlyDecodingAvailable()
+                         ? "this libavcodec skips the chroma planes: a luma-only decode was compared with a full one"
+                         : "this libavcodec has no luma-only decoding (built without --enable-gray): both decodes "
+                           "decoded chroma; tools/build-ffmpeg.sh builds one that has it";
+  MESSAGE(std::string(what));
 }
 
 TEST_CASE("H.264 macroblock quantisers: exported per block and per position, as the encoder chose them") {

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "drivers/decode/ffmpeg_util.h"
@@ -249,6 +250,12 @@ CodecPtr VideoDecoder::Impl::allocContext(const AVCodec* codec) const {
   return ctx;
 }
 
+bool lumaOnlyDecodingAvailable() {
+  static const bool available =
+      std::string_view(avcodec_configuration()).find("--enable-gray") != std::string_view::npos;
+  return available;
+}
+
 CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
   if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
@@ -264,6 +271,8 @@ CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   }
   // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
   if (motion_only || options.skip_loop_filter) ctx->skip_loop_filter = AVDISCARD_ALL;
+  // Asked of a libavcodec built without it, the flag is ignored with a warning on every open.
+  if (options.luma_only && lumaOnlyDecodingAvailable()) ctx->flags |= AV_CODEC_FLAG_GRAY;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
   const int rc = avcodec_open2(ctx.get(), codec, nullptr);
   if (rc < 0)

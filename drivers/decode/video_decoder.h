@@ -40,11 +40,18 @@ struct DecoderOptions {
   // the decode time, but the pictures then differ from the encoder's and the difference drifts until
   // the next I-frame; the vectors stay exact. Off by default: opt in where the accuracy allows.
   bool skip_loop_filter = false;
+  // Software decoding: skip the chroma planes (AV_CODEC_FLAG_GRAY) when libavcodec was built with
+  // --enable-gray (lumaOnlyDecodingAvailable). VOCA reads only the luma plane, which H.264 decodes
+  // from luma alone, so the pictures it sees are the same; about a tenth of the decode time.
+  bool luma_only = true;
   std::string vaapi_device = "/dev/dri/renderD128";
   // Corrupt bitstream data is an error naming the frame instead of being concealed.
   bool strict = true;
   bool log_choice = true;  // print the chosen decoder to stderr (once per process and description)
 };
+
+// Whether this libavcodec can skip the chroma planes (configured with --enable-gray; Debian's is not).
+bool lumaOnlyDecodingAvailable();
 
 // Decodes one video stream on the calling thread. Software decoding uses one thread and no frame
 // threading (frame threading adds a frame of latency and reorders side data); hardware decoders

@@ -32,8 +32,10 @@ struct CameraPackets {
 // Decodes every camera's packets once, frame k of all cameras together, and returns the number of
 // frames (of the first camera). frame_cpu_ms (if given) gets this thread's CPU time per frame;
 // vectors (if given) every camera frame's motion vectors, camera by camera within a frame.
+// luma_hash (if given) gets an FNV-1a hash of every luma plane decoded, in order.
 int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& options, DecodedFrame& frame,
-              std::vector<double>* frame_cpu_ms, std::vector<std::vector<MotionBlock>>* vectors) {
+              std::vector<double>* frame_cpu_ms, std::vector<std::vector<MotionBlock>>* vectors,
+              std::uint64_t* luma_hash = nullptr) {
   std::vector<std::unique_ptr<VideoDecoder>> decoders;
   for (std::size_t c = 0; c < cameras.size(); ++c) {
     decoders.push_back(
@@ -43,6 +45,12 @@ int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& o
   auto take = [&](std::size_t c) {
     while (decoders[c]->receive(frame)) {
       if (c == 0) ++frames;
+      if (luma_hash != nullptr) {
+        for (int y = 0; y < frame.luma.height(); ++y) {
+          const std::uint8_t* row = frame.luma.row(y);
+          for (int x = 0; x < frame.luma.width(); ++x) *luma_hash = (*luma_hash ^ row[x]) * 0x100000001b3ull;
+        }
+      }
       if (vectors != nullptr) {
         const auto blocks = frame.motion.blocks();
         vectors->emplace_back(blocks.begin(), blocks.end());
@@ -146,8 +154,12 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
       result.recording_fps > 0 ? bytes * 8.0 * result.recording_fps / all_packets / 1000.0 : 0.0;
   result.demux_packets_per_s = all_packets / std::max(demux_s, 1e-9);
 
-  std::vector<DecoderOptions> variants(4);
-  result.variants.resize(4);
+  // A libavcodec that can skip the chroma planes does so in every variant above; the fifth decodes
+  // them too, for the saving and to check that the luma planes are the same either way.
+  result.luma_only = lumaOnlyDecodingAvailable();
+  const std::size_t num_variants = result.luma_only ? 5 : 4;
+  std::vector<DecoderOptions> variants(num_variants);
+  result.variants.resize(num_variants);
   result.variants[0].label = "full decode + MV export";
   result.variants[1].label = "full decode, no MV export";
   variants[1].export_motion = false;
@@ -156,6 +168,10 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   // The opt-in `--skip-deblock` of voca run: pictures inexact, vectors exact (checked below).
   result.variants[3].label = "full + MV, deblocking skipped (opt-in)";
   variants[3].skip_loop_filter = true;
+  if (result.luma_only) {
+    result.variants[4].label = "full + MV, chroma decoded too";
+    variants[4].luma_only = false;
+  }
   const DecoderKind kind = parseDecoderKind(opts.decoder);
   for (DecoderOptions& v : variants) {
     v.kind = kind;
@@ -168,7 +184,13 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   // Warm-up run of each variant (caches, page faults), also checking that the MV-only parse gives the
   // same vectors as the full decode.
   std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors, unfiltered_vectors;
-  decodeAll(cameras, variants[0], frame, nullptr, &full_vectors);
+  std::uint64_t luma_hash = 0xcbf29ce484222325ull;
+  decodeAll(cameras, variants[0], frame, nullptr, &full_vectors, &luma_hash);
+  if (result.luma_only) {
+    std::uint64_t chroma_too_hash = 0xcbf29ce484222325ull;
+    decodeAll(cameras, variants[4], frame, nullptr, nullptr, &chroma_too_hash);
+    result.luma_only_identical = luma_hash == chroma_too_hash;
+  }
   decodeAll(cameras, variants[1], frame, nullptr, nullptr);
   decodeAll(cameras, variants[2], frame, nullptr, &parse_vectors);
   decodeAll(cameras, variants[3], frame, nullptr, &unfiltered_vectors);

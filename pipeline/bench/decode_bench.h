@@ -47,6 +47,8 @@ struct DecodeBenchResult {
   int frames = 0;                             // (stereo) frames per run
   double vectors_per_frame = 0.0;             // per camera frame
   bool parse_vectors_identical = false;       // MV-only parse and deblock-skipped decode == full decode's vectors
+  bool luma_only = false;                     // libavcodec skips the chroma planes (built with --enable-gray)
+  bool luma_only_identical = false;           // ... and the luma planes equal those of a decode with chroma
   std::vector<DecodeVariantResult> variants;  // full + MV, full without MV, MV-only parse, full + MV unfiltered
 };
 

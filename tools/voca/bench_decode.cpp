@@ -62,6 +62,13 @@ void printResult(const pipeline::DecodeBenchOptions& opts, const pipeline::Decod
              r.vectors_per_frame);
   fmt::print("  MV-only parse and deblocking-skipped vectors identical to full decode: {}\n",
              r.parse_vectors_identical ? "yes" : "NO");
+  if (r.luma_only) {
+    fmt::print(
+        "  luma only (libavcodec built with --enable-gray): yes; luma planes identical to a decode with chroma: {}\n",
+        r.luma_only_identical ? "yes" : "NO");
+  } else {
+    fmt::print("  luma only: no (this libavcodec was built without --enable-gray; tools/build-ffmpeg.sh builds one)\n");
+  }
   const pipeline::DecodeVariantResult& full = r.variants[0];
   if (stereo) {
     const char* verdict = full.median_ms > kTargetMedianMs     ? "missed"
