@@ -21,6 +21,9 @@ namespace {
 
 using namespace voca::decode;
 
+// FNV-1a, 64 bit: a hash of every decoded luma byte, to compare two decodes without keeping them.
+constexpr std::uint64_t kFnvOffsetBasis = 0xcbf29ce484222325ull, kFnvPrime = 0x100000001b3ull;
+
 double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 // One camera's packets, read before timing.
@@ -32,7 +35,7 @@ struct CameraPackets {
 // Decodes every camera's packets once, frame k of all cameras together, and returns the number of
 // frames (of the first camera). frame_cpu_ms (if given) gets this thread's CPU time per frame;
 // vectors (if given) every camera frame's motion vectors, camera by camera within a frame.
-// luma_hash (if given) gets an FNV-1a hash of every luma plane decoded, in order.
+// luma_hash (if given), an FNV-1a state, takes in every luma plane decoded, in order.
 int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& options, DecodedFrame& frame,
               std::vector<double>* frame_cpu_ms, std::vector<std::vector<MotionBlock>>* vectors,
               std::uint64_t* luma_hash = nullptr) {
@@ -48,7 +51,7 @@ int decodeAll(const std::vector<CameraPackets>& cameras, const DecoderOptions& o
       if (luma_hash != nullptr) {
         for (int y = 0; y < frame.luma.height(); ++y) {
           const std::uint8_t* row = frame.luma.row(y);
-          for (int x = 0; x < frame.luma.width(); ++x) *luma_hash = (*luma_hash ^ row[x]) * 0x100000001b3ull;
+          for (int x = 0; x < frame.luma.width(); ++x) *luma_hash = (*luma_hash ^ row[x]) * kFnvPrime;
         }
       }
       if (vectors != nullptr) {
@@ -184,10 +187,10 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   // Warm-up run of each variant (caches, page faults), also checking that the MV-only parse gives the
   // same vectors as the full decode.
   std::vector<std::vector<MotionBlock>> full_vectors, parse_vectors, unfiltered_vectors;
-  std::uint64_t luma_hash = 0xcbf29ce484222325ull;
+  std::uint64_t luma_hash = kFnvOffsetBasis;
   decodeAll(cameras, variants[0], frame, nullptr, &full_vectors, &luma_hash);
   if (result.luma_only) {
-    std::uint64_t chroma_too_hash = 0xcbf29ce484222325ull;
+    std::uint64_t chroma_too_hash = kFnvOffsetBasis;
     decodeAll(cameras, variants[4], frame, nullptr, nullptr, &chroma_too_hash);
     result.luma_only_identical = luma_hash == chroma_too_hash;
   }

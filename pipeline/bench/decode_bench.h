@@ -2,9 +2,10 @@
 // `voca bench decode`: decoder cost on this machine. Decodes a whole video, or both cameras of a VOCA
 // video folder frame by frame as the pipeline does, held in memory on one thread, as (1) full decode
 // with motion-vector export, (2) full decode without, (3) MV-only parse with the loop filter
-// skipped, (4) full decode + MV with the deblocking filter skipped (voca run --skip-deblock); times
-// every (stereo) frame with this thread's CPU clock and checks that (3) and (4) give the full decode's
-// vectors.
+// skipped, (4) full decode + MV with the deblocking filter skipped (voca run --skip-deblock), and,
+// when libavcodec decodes luma only (lumaOnlyDecodingAvailable), (5) full decode + MV with chroma
+// too; times every (stereo) frame with this thread's CPU clock and checks that (3) and (4) give the
+// full decode's vectors and (5) its luma planes.
 
 #include <cstddef>
 #include <filesystem>
@@ -49,7 +50,7 @@ struct DecodeBenchResult {
   bool parse_vectors_identical = false;       // MV-only parse and deblock-skipped decode == full decode's vectors
   bool luma_only = false;                     // libavcodec skips the chroma planes (built with --enable-gray)
   bool luma_only_identical = false;           // ... and the luma planes equal those of a decode with chroma
-  std::vector<DecodeVariantResult> variants;  // full + MV, full without MV, MV-only parse, full + MV unfiltered
+  std::vector<DecodeVariantResult> variants;  // full + MV, without MV, MV-only, unfiltered[, with chroma]
 };
 
 // Throws InputError for a bad --repeat, an unreadable video, one without packets, or cameras whose
