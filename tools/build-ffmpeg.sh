@@ -30,9 +30,10 @@ deb-src $mirror bookworm main
 deb-src $mirror bookworm-updates main
 EOF
 apt_opts=(-o Dir::Etc::sourcelist="$work/sources.list" -o Dir::Etc::sourceparts=- -o Dir::State::Lists="$work/lists")
-apt-get "${apt_opts[@]}" update >/dev/null
+"${sudo_cmd[@]}" apt-get "${apt_opts[@]}" update >/dev/null
 if ! ls ffmpeg_*.orig.tar.xz >/dev/null 2>&1; then
-  apt-get "${apt_opts[@]}" source --download-only ffmpeg >/dev/null 2>&1
+  "${sudo_cmd[@]}" apt-get "${apt_opts[@]}" source --download-only ffmpeg >"$work/source.log" 2>&1 ||
+    { tail -n 5 "$work/source.log"; echo "cannot download FFmpeg's source (deb-src from $mirror)" >&2; exit 1; }
 fi
 tarball="$(ls ffmpeg_*.orig.tar.xz | sort -V | tail -n1)"
 version="${tarball#ffmpeg_}"
