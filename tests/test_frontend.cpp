@@ -711,6 +711,87 @@ TEST_CASE("frontend: a wrong motion vector onto a repeated pattern is caught by 
   CHECK(parallel.rescued == 0);
 }
 
+TEST_CASE(
+    "frontend: thin_when_full_px drops the younger of two close tracks when full, in both cameras, for new points") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(0.6, -0.4)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  struct Outcome {
+    TrackedStereoFrame first, second;
+    FrontendStats stats;  // of the second frame
+  };
+  const auto run = [&](double distance, int max_points) {
+    FrontendConfig config;
+    config.prior_mode = PriorMode::kNone;
+    config.thin_when_full_px = distance;
+    KltFrontend frontend(config, rig, {.max_points = max_points});
+    Outcome o;
+    FrontendStats stats;
+    PlaneSequence sequence = seq;
+    sequence.render(0);
+    frontend.track(sequence.input(0), o.first, stats);
+    sequence.render(1);
+    frontend.track(sequence.input(1), o.second, o.stats);
+    return o;
+  };
+  // One corner per 40 px cell: corners of neighbouring cells can lie closer than 30 px.
+  constexpr double kDistance = 30.0;
+  // With room to spare nothing is dropped: the same tracks as without the key.
+  const Outcome roomy = run(0.0, 200);
+  const Outcome roomy_thin = run(kDistance, 200);
+  CHECK(roomy_thin.stats.thinned == 0);
+  REQUIRE(roomy_thin.second.observations[0].size() == roomy.second.observations[0].size());
+  for (std::size_t i = 0; i < roomy.second.observations[0].size(); ++i) {
+    CHECK(roomy_thin.second.observations[0][i].track_id == roomy.second.observations[0][i].track_id);
+    CHECK(roomy_thin.second.observations[0][i].px == roomy.second.observations[0][i].px);
+  }
+  // The capacity of the first frame's points: every one survives the small motion, the tracker is
+  // full and detects nothing.
+  const int capacity = static_cast<int>(roomy.first.observations[0].size());
+  const Outcome full = run(0.0, capacity);
+  REQUIRE(full.stats.temporal[0].kept == capacity);
+  CHECK(full.stats.detected == 0);
+  CHECK(full.stats.thinned == 0);
+  // The rule written out on those tracks: ids ascend with age; a track is kept unless an older
+  // kept one lies closer than the distance.
+  const std::vector<KeypointObservation>& tracked = full.second.observations[0];
+  std::vector<KeypointObservation> expected;
+  for (const auto& t : tracked) {
+    const bool crowded = std::any_of(expected.begin(), expected.end(), [&](const KeypointObservation& e) {
+      return (e.px - t.px).norm() < static_cast<float>(kDistance);
+    });
+    if (!crowded) expected.push_back(t);
+  }
+  REQUIRE(expected.size() >= 5);
+  REQUIRE(expected.size() < tracked.size());
+  const Outcome thin = run(kDistance, capacity);
+  std::set<std::uint64_t> first_ids;
+  for (const auto& o : thin.first.observations[0]) first_ids.insert(o.track_id);
+  const auto tracks_of_first = [&](const std::vector<KeypointObservation>& observations) {
+    std::vector<KeypointObservation> out;
+    for (const auto& o : observations)
+      if (first_ids.count(o.track_id) != 0) out.push_back(o);
+    return out;
+  };
+  const std::vector<KeypointObservation> kept = tracks_of_first(thin.second.observations[0]);
+  REQUIRE(kept.size() == expected.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    CHECK(kept[i].track_id == expected[i].track_id);
+    CHECK(kept[i].px == expected[i].px);
+  }
+  CHECK(thin.stats.thinned == static_cast<int>(tracked.size() - expected.size()));
+  // The room they leave goes to new points in empty cells.
+  CHECK(thin.stats.detected > 0);
+  CHECK(thin.stats.detected <= thin.stats.thinned);
+  // The right camera keeps the right observations of the kept tracks only.
+  std::set<std::uint64_t> kept_ids;
+  for (const auto& o : kept) kept_ids.insert(o.track_id);
+  std::size_t right_expected = 0;
+  for (const auto& o : full.second.observations[1]) right_expected += kept_ids.count(o.track_id);
+  const std::vector<KeypointObservation> right_kept = tracks_of_first(thin.second.observations[1]);
+  CHECK(right_kept.size() == right_expected);
+  for (const auto& o : right_kept) CHECK(kept_ids.count(o.track_id) == 1);
+}
+
 TEST_CASE("frontend: prior_agree_radius_px takes a vector landing next to the plain result as agreement, untracked") {
   PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
   const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);

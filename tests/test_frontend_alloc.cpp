@@ -27,21 +27,25 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
   // The five modes, then the paper's mode with the options of our own (presmooth) and of TUM-VI
   // (right-only detection, on a 0.4 m baseline rig so that the right image has cells of its own).
   const StereoRig wide_rig = voca::test::pinholeRig(w, h, 300.0, 0.4);
-  const std::array<PriorMode, 6> modes = {PriorMode::kNone,     PriorMode::kMv,           PriorMode::kOfThenMv,
-                                          PriorMode::kMvThenOf, PriorMode::kMvParallelOf, PriorMode::kMvParallelOf};
-  for (int run = 0; run < 6; ++run) {
+  // Last, a still scene with a small capacity: every track survives, the tracker is full each frame
+  // and crowded tracks give way to new points (thin_when_full_px).
+  const std::array<PriorMode, 7> modes = {PriorMode::kNone,        PriorMode::kMv,           PriorMode::kOfThenMv,
+                                          PriorMode::kMvThenOf,    PriorMode::kMvParallelOf, PriorMode::kMvParallelOf,
+                                          PriorMode::kMvParallelOf};
+  for (int run = 0; run < 7; ++run) {
     const PriorMode mode = modes[static_cast<std::size_t>(run)];
     FrontendConfig config;
     config.prior_mode = mode;
     config.presmooth = run == 5;
     config.detection_nonoverlap = run == 5;
-    KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = 300});
+    config.thin_when_full_px = run == 6 ? 50.0 : 0.0;
+    KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = run == 6 ? 30 : 300});
     TrackedStereoFrame out;
     FrontendStats stats;
     DecodedStereoFrame in;
     in.reserve(w, h);
     long steady_allocations = 0, first_frame_allocations = 0;
-    int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0;
+    int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0, thinned_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
       const long before = voca::test::g_allocations.load();
       // Every third frame is an I-frame, so bridging copies run inside the window too.
@@ -53,8 +57,9 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
       }
       field.finalize();
       // Filling the message reuses its buffers (sized before the loop), as the pipeline's slots do.
-      in.images[0] = left[static_cast<std::size_t>(k)];
-      in.images[1] = right[static_cast<std::size_t>(k)];
+      const auto image = static_cast<std::size_t>(run == 6 ? 0 : k);
+      in.images[0] = left[image];
+      in.images[1] = right[image];
       in.motion[0].copyFrom(field);
       in.motion[1].copyFrom(field);
       in.has_motion = true;
@@ -66,10 +71,12 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
         steady_allocations += voca::test::g_allocations.load() - before;
         detected_after_start += stats.detected;
         right_only_after_start += stats.detected_right_only;
+        thinned_after_start += stats.thinned;
         tracked_after_start += stats.temporal[0].kept + stats.temporal[1].kept;
       }
     }
-    INFO("mode " << priorModeName(mode) << (run == 5 ? " with presmooth and detection_nonoverlap" : ""));
+    INFO("mode " << priorModeName(mode) << (run == 5 ? " with presmooth and detection_nonoverlap" : "")
+                 << (run == 6 ? " with thin_when_full_px on a still scene" : ""));
     CHECK(steady_allocations == 0);
     // The counter sees the operator new calls: the first frame reserves the output buffers.
     CHECK(first_frame_allocations > 0);
@@ -77,5 +84,6 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     CHECK(detected_after_start > 0);
     CHECK(tracked_after_start > 100);
     if (run == 5) CHECK(right_only_after_start > 0);
+    if (run == 6) CHECK(thinned_after_start > 0);
   }
 }

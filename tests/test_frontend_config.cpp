@@ -58,6 +58,7 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.pattern == 52);
   CHECK(tumvi.frontend.detection_nonoverlap);
   CHECK(tumvi.frontend.prior_agree_radius_px == 1.0);
+  CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
   CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
@@ -142,6 +143,8 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.prior_agree_radius_px: expected a number in [0,"));
   message = errorFor(R"({"frontend": {"prior_rescue_min_px": -1}})");
   CHECK(contains(message, "frontend.prior_rescue_min_px: expected a number in [0,"));
+  message = errorFor(R"({"frontend": {"thin_when_full_px": -2}})");
+  CHECK(contains(message, "frontend.thin_when_full_px: expected a number in [0,"));
 
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));

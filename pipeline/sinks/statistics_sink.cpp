@@ -73,6 +73,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
   }
   f.detected += s.detected;
   f.detected_right_only += s.detected_right_only;
+  f.thinned += s.thinned;
   f.stereo_matched += s.stereo_matched;
   f.epipolar += s.epipolar_rejected;
   f.bridged_frames += (s.bridged[0] || s.bridged[1]) ? 1 : 0;

@@ -430,6 +430,10 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
     fmt::print(out, "right-only points (detection_nonoverlap): {:.1f} new per frame\n",
                static_cast<double>(t.detected_right_only) / frames);
   }
+  if (config.thin_when_full_px > 0.0) {
+    fmt::print(out, "tracks dropped next to an older one (thin_when_full_px {}): {:.1f} per frame\n",
+               config.thin_when_full_px, static_cast<double>(t.thinned) / frames);
+  }
   if (t.guess_prior.count() > 0) {
     fmt::print(out,
                "guess to converged distance (px, {} kept tracks with a vector): previous position median {} p90 "
@@ -502,6 +506,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"prior_tracks_confirmed", t.prior_confirmed},
                    {"detected", t.detected},
                    {"detected_right_only", t.detected_right_only},
+                   {"thinned", t.thinned},
                    {"stereo_matched", t.stereo_matched},
                    {"epipolar_rejections", t.epipolar},
                    {"bridged_frames", t.bridged_frames},

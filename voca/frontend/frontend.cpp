@@ -17,7 +17,7 @@ void FrontendStats::reserve(std::size_t max_points) {
 void FrontendStats::clear() {
   temporal = {};
   bridged = {false, false};
-  detected = detected_right_only = stereo_matched = epipolar_rejected = num_left = num_right = 0;
+  detected = detected_right_only = stereo_matched = epipolar_rejected = thinned = num_left = num_right = 0;
   guess_dist_plain_px.clear();
   guess_dist_prior_px.clear();
   time_ms = 0.0;
@@ -96,6 +96,13 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   const Eigen::Vector3d t = T_cam0_cam1.translation();
   essential_ = skew(t.norm() > 0.0 ? Eigen::Vector3d(t.normalized()) : t) * T_cam0_cam1.rotationMatrix();
   average_depth_m_ = config_.matching_default_depth_m;
+  if (config_.thin_when_full_px > 0.0) {
+    thin_cell_px_ = static_cast<float>(config_.thin_when_full_px / 2.0);
+    thin_cols_ = static_cast<int>(std::ceil(static_cast<float>(max_width) / thin_cell_px_)) + 1;
+    thin_rows_ = static_cast<int>(std::ceil(static_cast<float>(max_height) / thin_cell_px_)) + 1;
+    thin_grid_.assign(static_cast<std::size_t>(thin_cols_) * static_cast<std::size_t>(thin_rows_), -1);
+    thinned_ids_.reserve(static_cast<std::size_t>(max_points_));
+  }
 
   detector_params_.grid_size_px = config_.grid_size_px;
   detector_params_.max_threshold = config_.detection_max_threshold;
@@ -398,6 +405,72 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   std::swap(cam.slots, cam.next_slots);
 }
 
+void KltFrontend::thinTracks(FrontendStats& stats) {
+  CameraState& left = cameras_[0];
+  CameraState& right = cameras_[1];
+  const float min_distance2 = static_cast<float>(config_.thin_when_full_px * config_.thin_when_full_px);
+  // Cells are half the distance wide: two points closer than it lie at most two cells apart.
+  constexpr int kReach = 2;
+  const auto cellOf = [&](float v, int cells) {
+    return std::clamp(static_cast<int>(std::floor(v / thin_cell_px_)), 0, cells - 1);
+  };
+  thinned_ids_.clear();
+  // Ids are issued in increasing order: the list is oldest first, so the older of two close tracks
+  // is always the one already kept. Kept points are compacted in place.
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < left.points.size(); ++i) {
+    const Eigen::Vector2f p = left.points[i];
+    const int cx = cellOf(p.x(), thin_cols_), cy = cellOf(p.y(), thin_rows_);
+    bool crowded = false;
+    for (int y = std::max(0, cy - kReach); y <= std::min(thin_rows_ - 1, cy + kReach) && !crowded; ++y) {
+      for (int x = std::max(0, cx - kReach); x <= std::min(thin_cols_ - 1, cx + kReach); ++x) {
+        const int other = thin_grid_[static_cast<std::size_t>(y * thin_cols_ + x)];
+        if (other >= 0 && (left.points[static_cast<std::size_t>(other)] - p).squaredNorm() < min_distance2) {
+          crowded = true;
+          break;
+        }
+      }
+    }
+    if (crowded) {
+      thinned_ids_.push_back(left.ids[i]);
+      left.release(left.slots[i]);
+      continue;
+    }
+    thin_grid_[static_cast<std::size_t>(cy * thin_cols_ + cx)] = static_cast<int>(kept);
+    left.ids[kept] = left.ids[i];
+    left.points[kept] = p;
+    left.slots[kept] = left.slots[i];
+    ++kept;
+  }
+  // The grid is cleared through the kept points: far fewer than its cells.
+  for (std::size_t i = 0; i < kept; ++i) {
+    const Eigen::Vector2f p = left.points[i];
+    thin_grid_[static_cast<std::size_t>(cellOf(p.y(), thin_rows_) * thin_cols_ + cellOf(p.x(), thin_cols_))] = -1;
+  }
+  left.ids.resize(kept);
+  left.points.resize(kept);
+  left.slots.resize(kept);
+  stats.thinned = static_cast<int>(thinned_ids_.size());
+  if (thinned_ids_.empty()) return;
+  // The same tracks in the right camera: both id lists ascend, one merge pass.
+  std::size_t d = 0, out = 0;
+  for (std::size_t r = 0; r < right.ids.size(); ++r) {
+    const std::uint64_t id = right.ids[r];
+    while (d < thinned_ids_.size() && thinned_ids_[d] < id) ++d;
+    if (d < thinned_ids_.size() && thinned_ids_[d] == id) {
+      right.release(right.slots[r]);
+      continue;
+    }
+    right.ids[out] = id;
+    right.points[out] = right.points[r];
+    right.slots[out] = right.slots[r];
+    ++out;
+  }
+  right.ids.resize(out);
+  right.points.resize(out);
+  right.slots.resize(out);
+}
+
 void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats) {
   CameraState& left = cameras_[0];
   CameraState& right = cameras_[1];
@@ -512,6 +585,10 @@ void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out
       cameras_[static_cast<std::size_t>(c)].traces.clear();
     }
   }
+  // Every track survived and the capacity is full: no point could be detected. Crowded tracks give
+  // way (thin_when_full_px).
+  if (have_previous_ && config_.thin_when_full_px > 0.0 && static_cast<int>(cameras_[0].points.size()) >= max_points_)
+    thinTracks(stats);
   detectAndMatch(input, stats);
   if (config_.detection_nonoverlap) detectRightOnly(input, stats);
   filterEpipolar(stats);

@@ -50,6 +50,7 @@ struct FrontendStats {
   int detected_right_only = 0;                // new right points where the left camera does not see
   int stereo_matched = 0;                     // of the new points, found in the right image
   int epipolar_rejected = 0;                  // right observations dropped by the epipolar check
+  int thinned = 0;                            // left tracks dropped next to an older one (thin_when_full_px)
   int num_left = 0, num_right = 0;            // observations output
   // For every kept temporal track that had a motion vector, the distance from each initial guess
   // (previous position: plain; previous position + vector: prior) to the converged position, in
@@ -138,6 +139,8 @@ class KltFrontend {
                      const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
                      const Eigen::Vector2f& fine_start, int levels, std::span<PatchTemplate> backward) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
+  // thin_when_full_px: drops the younger of two left tracks too close together, in both cameras.
+  void thinTracks(FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
@@ -164,6 +167,12 @@ class KltFrontend {
   std::vector<std::uint8_t> right_overlap_;  // per right-image cell, non-zero: the left camera sees it
   GridDetector detector_;
   std::vector<Eigen::Vector2f> new_points_;
+  // thinTracks: a grid of cells (thin_when_full_px / 2 wide, so a cell holds at most one kept
+  // point) with each kept point's index or -1, and the ids dropped in one call.
+  std::vector<int> thin_grid_;
+  int thin_cols_ = 0, thin_rows_ = 0;
+  float thin_cell_px_ = 0.f;
+  std::vector<std::uint64_t> thinned_ids_;
   std::array<CameraState, 2> cameras_;
   std::uint64_t next_track_id_ = 1;
   bool have_previous_ = false;

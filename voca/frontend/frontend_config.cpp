@@ -97,6 +97,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
   checkInt(context, "backward_pyramid_levels", c.backward_pyramid_levels, -1, c.pyramid_levels);
   checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
+  checkReal(context, "thin_when_full_px", c.thin_when_full_px, 0.0, 1000.0, false);
   checkReal(context, "prior_rescue_min_px", c.prior_rescue_min_px, 0.0, 1e6, false);
 }
 

@@ -110,6 +110,13 @@ struct FrontendConfig {
   // at matching_default_depth_m misses the left image); those tracks are right-only. TUM-VI's
   // official setting (optical_flow_detection_nonoverlap, from Monado's Basalt).
   bool detection_nonoverlap = false;
+  // When the left camera's tracks fill the capacity (max_points) after the temporal step, so that no
+  // point could be detected, the younger of two left tracks closer than this (level-0 pixels) is
+  // dropped, in both cameras, to make room. Where the image flow converges (a forward flight's far
+  // field, the camera backing away) no track leaves the image and tracks bunch onto the same
+  // texture: near-duplicates that weigh one error twice, age without end and keep every fresh point
+  // out. Basalt has no capacity, so it never gets here; 0 = never drop.
+  double thin_when_full_px = 0.0;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
   // patterns' 2 px sample grid has on sharp images (see ImagePyramid). Not in Basalt or the paper.
   bool presmooth = false;
