@@ -52,12 +52,15 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(e.bridge_iframes);
   CHECK_FALSE(e.presmooth);               // not in the paper: off in its configurations
   CHECK(e.prior_agree_radius_px == 1.0);  // ours (configs/README.md), a speed-up in every shipped config
+  CHECK(e.thin_when_full_px == 8.0);      // ours (configs/README.md): crowded tracks give way when full
   const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
   CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
   CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
   CHECK(tumvi.frontend.pattern == 52);
   CHECK(tumvi.frontend.detection_nonoverlap);
   CHECK(tumvi.frontend.prior_agree_radius_px == 1.0);
+  CHECK(tumvi.frontend.thin_when_full_px == 8.0);
+  CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.thin_when_full_px == 8.0);
   CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
   CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
