@@ -416,59 +416,34 @@ void KltFrontend::thinTracks(FrontendStats& stats) {
   };
   thinned_ids_.clear();
   // Ids are issued in increasing order: the list is oldest first, so the older of two close tracks
-  // is always the one already kept. Kept points are compacted in place.
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < left.points.size(); ++i) {
+  // is always the one already kept.
+  left.retain([&](std::size_t i, std::size_t kept) {
     const Eigen::Vector2f p = left.points[i];
     const int cx = cellOf(p.x(), thin_cols_), cy = cellOf(p.y(), thin_rows_);
-    bool crowded = false;
-    for (int y = std::max(0, cy - kReach); y <= std::min(thin_rows_ - 1, cy + kReach) && !crowded; ++y) {
+    for (int y = std::max(0, cy - kReach); y <= std::min(thin_rows_ - 1, cy + kReach); ++y) {
       for (int x = std::max(0, cx - kReach); x <= std::min(thin_cols_ - 1, cx + kReach); ++x) {
         const int other = thin_grid_[static_cast<std::size_t>(y * thin_cols_ + x)];
         if (other >= 0 && (left.points[static_cast<std::size_t>(other)] - p).squaredNorm() < min_distance2) {
-          crowded = true;
-          break;
+          thinned_ids_.push_back(left.ids[i]);
+          return false;
         }
       }
     }
-    if (crowded) {
-      thinned_ids_.push_back(left.ids[i]);
-      left.release(left.slots[i]);
-      continue;
-    }
     thin_grid_[static_cast<std::size_t>(cy * thin_cols_ + cx)] = static_cast<int>(kept);
-    left.ids[kept] = left.ids[i];
-    left.points[kept] = p;
-    left.slots[kept] = left.slots[i];
-    ++kept;
-  }
+    return true;
+  });
   // The grid is cleared through the kept points: far fewer than its cells.
-  for (std::size_t i = 0; i < kept; ++i) {
-    const Eigen::Vector2f p = left.points[i];
+  for (const Eigen::Vector2f& p : left.points) {
     thin_grid_[static_cast<std::size_t>(cellOf(p.y(), thin_rows_) * thin_cols_ + cellOf(p.x(), thin_cols_))] = -1;
   }
-  left.ids.resize(kept);
-  left.points.resize(kept);
-  left.slots.resize(kept);
   stats.thinned = static_cast<int>(thinned_ids_.size());
   if (thinned_ids_.empty()) return;
   // The same tracks in the right camera: both id lists ascend, one merge pass.
-  std::size_t d = 0, out = 0;
-  for (std::size_t r = 0; r < right.ids.size(); ++r) {
-    const std::uint64_t id = right.ids[r];
-    while (d < thinned_ids_.size() && thinned_ids_[d] < id) ++d;
-    if (d < thinned_ids_.size() && thinned_ids_[d] == id) {
-      right.release(right.slots[r]);
-      continue;
-    }
-    right.ids[out] = id;
-    right.points[out] = right.points[r];
-    right.slots[out] = right.slots[r];
-    ++out;
-  }
-  right.ids.resize(out);
-  right.points.resize(out);
-  right.slots.resize(out);
+  std::size_t d = 0;
+  right.retain([&](std::size_t r, std::size_t) {
+    while (d < thinned_ids_.size() && thinned_ids_[d] < right.ids[r]) ++d;
+    return d == thinned_ids_.size() || thinned_ids_[d] != right.ids[r];
+  });
 }
 
 void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats) {
@@ -532,31 +507,19 @@ void KltFrontend::filterEpipolar(FrontendStats& stats) {
   CameraState& right = cameras_[1];
   // Both id lists are ascending (ids are issued in increasing order and removals keep the order),
   // so one merge pass pairs them.
-  std::size_t l = 0, out = 0;
+  std::size_t l = 0;
   const float threshold = static_cast<float>(config_.epipolar_error);
-  for (std::size_t r = 0; r < right.ids.size(); ++r) {
+  right.retain([&](std::size_t r, std::size_t) {
     const std::uint64_t id = right.ids[r];
     while (l < left.ids.size() && left.ids[l] < id) ++l;
-    bool keep = true;
-    if (l < left.ids.size() && left.ids[l] == id) {
-      Eigen::Vector3d f0, f1;
-      const bool ok0 = cameras_model_[0].unproject(left.points[l].cast<double>(), f0);
-      const bool ok1 = cameras_model_[1].unproject(right.points[r].cast<double>(), f1);
-      keep = ok0 && ok1 && std::abs(f0.dot(essential_ * f1)) <= threshold;
-      if (!keep) ++stats.epipolar_rejected;
-    }
-    if (keep) {
-      right.ids[out] = id;
-      right.points[out] = right.points[r];
-      right.slots[out] = right.slots[r];
-      ++out;
-    } else {
-      right.release(right.slots[r]);
-    }
-  }
-  right.ids.resize(out);
-  right.points.resize(out);
-  right.slots.resize(out);
+    if (l == left.ids.size() || left.ids[l] != id) return true;  // a right-only track
+    Eigen::Vector3d f0, f1;
+    const bool ok0 = cameras_model_[0].unproject(left.points[l].cast<double>(), f0);
+    const bool ok1 = cameras_model_[1].unproject(right.points[r].cast<double>(), f1);
+    const bool keep = ok0 && ok1 && std::abs(f0.dot(essential_ * f1)) <= threshold;
+    if (!keep) ++stats.epipolar_rejected;
+    return keep;
+  });
 }
 
 void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {

@@ -120,6 +120,25 @@ class KltFrontend {
     }
     void release(int index) { free_slots.push_back(index); }
     void resetSlots();
+    // Keeps, in order, the points for which keep(index, kept_so_far) is true and frees the others'
+    // slots. keep may read the points already kept: they sit at [0, kept_so_far).
+    template <class Keep>
+    void retain(Keep keep) {
+      std::size_t out = 0;
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        if (!keep(i, out)) {
+          release(slots[i]);
+          continue;
+        }
+        ids[out] = ids[i];
+        points[out] = points[i];
+        slots[out] = slots[i];
+        ++out;
+      }
+      ids.resize(out);
+      points.resize(out);
+      slots.resize(out);
+    }
   };
 
   // Forward-backward tracking from `from` to `to` with a flow guess on the finest `levels` pyramid
