@@ -400,3 +400,22 @@ TEST_CASE("loadCalibration explains what it cannot read") {
   mono.cameras.resize(1);
   CHECK_THROWS_AS(mono.T_cam0_cam1(), voca::InputError);
 }
+
+TEST_CASE("loadCalibration refuses a rig whose right camera sits on the left one") {
+  voca::test::ScratchDir dir("calib-baseline");
+  const fs::path file = dir / "rig_calib.json";
+  json j = basaltJson();
+  // Both poses the same: no baseline to triangulate with.
+  j["value0"]["T_imu_cam"][1]["px"] = 0.0;
+  writeText(file, j.dump(2));
+  const std::string error = errorOf(file);
+  expectError(error, "rig_calib.json: cam1 is 0 mm from cam0: a stereo rig needs a baseline of at least 1 mm");
+  // A baseline in the wrong unit (0.11 mm instead of 0.11 m), through a folder as well.
+  j["value0"]["T_imu_cam"][1]["px"] = 0.00011;
+  writeText(file, j.dump(2));
+  expectError(errorOf(dir.path()), "cam1 is 0.11 mm from cam0");
+  // Two millimetres is a (small) rig.
+  j["value0"]["T_imu_cam"][1]["px"] = 0.002;
+  writeText(file, j.dump(2));
+  CHECK(voca::loadCalibration(file).baselineM() == doctest::Approx(0.002));
+}

@@ -1,5 +1,6 @@
 #include "formats/calib/calibration_io.h"
 
+#include <fmt/format.h>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <optional>
@@ -46,7 +47,14 @@ std::optional<fs::path> findCalibrationJson(const fs::path& folder) {
   return *std::min_element(found.begin(), found.end());
 }
 
-StereoRig loadCalibration(const fs::path& path) {
+namespace {
+
+// Stereo triangulates along the baseline: a right camera at the left one's position (a copied pose,
+// a translation given in the wrong unit) leaves every new point without depth, so every frame would
+// be lost. Real rigs start at about a centimetre (phones); this only catches the mistake.
+constexpr double kMinBaselineM = 1e-3;
+
+StereoRig readCalibration(const fs::path& path) {
   if (!fs::exists(path)) throw InputError(path.string() + ": calibration not found");
   if (fs::is_directory(path)) {
     if (fs::is_regular_file(path / "mav0" / "cam0" / "sensor.yaml")) return loadEurocSensorCalibration(path / "mav0");
@@ -71,6 +79,20 @@ StereoRig loadCalibration(const fs::path& path) {
   throw InputError(path.string() +
                    ": unknown calibration format: expected a Basalt .json, a Kalibr camchain .yaml, a KITTI "
                    "calib.txt, or a dataset folder");
+}
+
+}  // namespace
+
+StereoRig loadCalibration(const fs::path& path) {
+  StereoRig rig = readCalibration(path);
+  const double baseline = rig.baselineM();
+  if (!(baseline >= kMinBaselineM)) {
+    throw InputError(fmt::format(
+        "{}: cam1 is {:.3g} mm from cam0: a stereo rig needs a baseline of at least {:g} mm (are both camera "
+        "poses the same, or is the translation in the wrong unit?)",
+        rig.source, baseline * 1e3, kMinBaselineM * 1e3));
+  }
+  return rig;
 }
 
 }  // namespace voca
