@@ -73,8 +73,7 @@ void VoEstimator::reset() {
   prior_.clear();
   initialized_ = false;
   pending_reset_ = false;
-  last_good_T_w_c_ = T_body_cam0_;  // the body starts at the world origin
-  previous_T_w_c_ = last_good_T_w_c_;
+  previous_T_w_c_ = T_body_cam0_;  // the body starts at the world origin
   velocity_ = SE3d();
   frames_since_kf_ = 0;
 }
@@ -99,7 +98,6 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
   const SE3d origin = T_w_c;
   reset();
   pending_reset_ = pending;
-  last_good_T_w_c_ = origin;
   previous_T_w_c_ = origin;
   const int slot = window_.add(frame, origin);
   WindowFrame& f = window_[slot];
@@ -112,7 +110,6 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
   if (created < config_.min_inliers) {
     reset();
     pending_reset_ = pending;
-    last_good_T_w_c_ = origin;
     previous_T_w_c_ = origin;
     return false;
   }
@@ -335,7 +332,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   };
   const auto startOver = [&](FailureReason reason) -> const PoseEstimate& {
     est.failure = reason;
-    if (initialize(frame, last_good_T_w_c_)) {
+    if (initialize(frame, previous_T_w_c_)) {
       est.state = pending_reset_ ? TrackingState::kReset : TrackingState::kTracking;
       pending_reset_ = false;
       est.keyframe = true;
@@ -350,8 +347,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
       est.failure = reason == FailureReason::kNone ? FailureReason::kTooFewStereoPoints : reason;
     }
     velocity_ = SE3d();
-    previous_T_w_c_ = last_good_T_w_c_;
-    return finish(last_good_T_w_c_);
+    return finish(previous_T_w_c_);
   };
 
   if (!initialized_) return startOver(FailureReason::kNone);
@@ -416,7 +412,6 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   est.state = TrackingState::kTracking;
   velocity_ = intervals == 1 ? step : SE3d::exp(step.log() / static_cast<double>(intervals));
   previous_T_w_c_ = T_w_c;
-  last_good_T_w_c_ = T_w_c;
   return finish(T_w_c);
 }
 

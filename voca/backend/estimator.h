@@ -127,10 +127,8 @@ class VoEstimator {
 
   bool initialized_ = false;
   bool pending_reset_ = false;  // a failure happened; the next successful initialisation is a reset
-  SE3d last_good_T_w_c_;
-  SE3d previous_T_w_c_;
-  bool have_previous_ = false;
-  SE3d velocity_;  // T_prev_current of the last tracked step, for the constant-velocity guess
+  SE3d previous_T_w_c_;         // the pose given for the previous frame (tracked, or where a failed one started over)
+  SE3d velocity_;               // T_prev_current of the last tracked step, for the constant-velocity guess
   PoseEstimate estimate_;
 };
 
