@@ -78,8 +78,8 @@ class PacketSource final : public SourceStage {
   PacketSource(const StereoStream& stream, int first, int lossy_camera, std::vector<int> lost)
       : stream_(stream), next_(first), lossy_camera_(lossy_camera), lost_(std::move(lost)) {}
   std::string_view name() const override { return "receive"; }
-  bool produce(FrameSlot& slot) override {
-    if (next_ >= static_cast<int>(stream_.packets.size())) return false;
+  Produced produce(FrameSlot& slot) override {
+    if (next_ >= static_cast<int>(stream_.packets.size())) return Produced::kEnd;
     const encode::EncodedPacket& p = stream_.packets[static_cast<std::size_t>(next_)];
     const bool lost = std::find(lost_.begin(), lost_.end(), next_) != lost_.end();
     for (int c = 0; c < 2; ++c) {
@@ -98,7 +98,7 @@ class PacketSource final : public SourceStage {
     slot.frame.frame_index = next_;
     ++next_;
     ++sent_;
-    return true;
+    return Produced::kFrame;
   }
 
  private:

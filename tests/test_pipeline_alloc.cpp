@@ -180,10 +180,10 @@ class CountingSource final : public SourceStage {
  public:
   explicit CountingSource(SourceStage& inner) : inner_(inner) {}
   std::string_view name() const override { return inner_.name(); }
-  bool produce(FrameSlot& slot) override {
+  Produced produce(FrameSlot& slot) override {
     const Mark mark = Mark::now();
-    const bool produced = inner_.produce(slot);
-    if (produced && slot.frameIndex() >= kWarmup) {
+    const Produced produced = inner_.produce(slot);
+    if (produced == Produced::kFrame && slot.frameIndex() >= kWarmup) {
       const Mark now = Mark::now();
       tally.steady += now.all - mark.all;
       tally.ffmpeg += now.ffmpeg - mark.ffmpeg;

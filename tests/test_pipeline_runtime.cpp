@@ -23,22 +23,25 @@ using namespace voca::pipeline;
 
 namespace {
 
-// Frames 0..count-1, as fast as the pipeline takes them.
+// Frames 0..count-1, as fast as the pipeline takes them; the ones in `damaged` come out unreadable.
 class CountingSource final : public SourceStage {
  public:
-  explicit CountingSource(std::int64_t count) : count_(count) {}
+  explicit CountingSource(std::int64_t count, std::vector<std::int64_t> damaged = {})
+      : count_(count), damaged_(std::move(damaged)) {}
   std::string_view name() const override { return "read"; }
-  bool produce(FrameSlot& slot) override {
-    if (interrupted_ || next_ >= count_) return false;
+  Produced produce(FrameSlot& slot) override {
+    if (interrupted_ || next_ >= count_) return Produced::kEnd;
     slot.frame.frame_index = next_++;
     slot.frame.t_ns = slot.frame.frame_index * 1000;
-    return true;
+    const bool damaged = std::find(damaged_.begin(), damaged_.end(), slot.frame.frame_index) != damaged_.end();
+    return damaged ? Produced::kDamaged : Produced::kFrame;
   }
   void interrupt() override { interrupted_ = true; }
   std::int64_t produced() const { return next_; }
 
  private:
   std::int64_t count_;
+  std::vector<std::int64_t> damaged_;
   std::int64_t next_ = 0;
   std::atomic<bool> interrupted_{false};
 };
@@ -206,6 +209,39 @@ TEST_CASE("pipeline: live policy drops only in front of a skippable stage, and e
   for (const ReleasedFrame& f : report.released) {
     CHECK(f.reason == ReleaseReason::kDropped);
     CHECK_FALSE(seen[static_cast<std::size_t>(f.frame_index)]);
+  }
+}
+
+TEST_CASE("pipeline: frames the source could not read are released as damaged at the read stage and listed") {
+  constexpr std::int64_t kFrames = 200;
+  const std::vector<std::int64_t> damaged = {0, 57, 58, 199};  // first, a run of two, last
+  for (const int threads : {1, 0}) {
+    INFO("threads " << threads);
+    CountingSource source(kFrames, damaged);
+    DelayStage decode("decode", 5, 1), frontend("frontend", 5, 2, true);
+    RecordingSink sink;
+    PipelineOptions options;
+    options.threads = threads;
+    Pipeline pipeline(source, {&decode, &frontend, &sink}, options);
+    const RunReport report = pipeline.run();
+    CHECK_FALSE(report.error);
+    CHECK(report.produced == kFrames);
+    CHECK(report.damaged == static_cast<std::int64_t>(damaged.size()));
+    CHECK(report.stages[0].damaged == report.damaged);
+    CHECK(report.completed == kFrames - report.damaged);
+    // No later stage saw them; every other frame went through in order.
+    CHECK(decode.seen() == kFrames - report.damaged);
+    REQUIRE(sink.indices.size() == static_cast<std::size_t>(report.completed));
+    CHECK(strictlyIncreasing(sink.indices));
+    for (const std::int64_t i : damaged) {
+      CHECK(std::find(sink.indices.begin(), sink.indices.end(), i) == sink.indices.end());
+    }
+    REQUIRE(report.released.size() == damaged.size());
+    for (std::size_t k = 0; k < damaged.size(); ++k) {
+      CHECK(report.released[k].frame_index == damaged[k]);
+      CHECK(report.released[k].reason == ReleaseReason::kDamaged);
+      CHECK(report.released[k].stage == 0);
+    }
   }
 }
 

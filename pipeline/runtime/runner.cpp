@@ -269,18 +269,22 @@ struct Pipeline::Impl final : StageContext {
       t.cpu_start_ns = platform::threadCpuNs();
       slot->owner_stage = 0;
       slot->arrival_ns = 0;
-      bool produced = false;
+      Produced produced = Produced::kEnd;
       try {
         produced = source.produce(*slot);
       } catch (const std::exception& e) {
         fail(0, nullptr, e.what());
       }
-      if (!produced) {
+      if (produced == Produced::kEnd) {
         releaseToFree(0, *slot);
         break;
       }
       slot->sequence = sequence++;
       ++report.produced;
+      if (produced == Produced::kDamaged) {
+        release(0, *slot, ReleaseReason::kDamaged);
+        continue;
+      }
       if (slot->arrival_ns == 0) {
         slot->arrival_ns = platform::monotonicNs();
       } else {

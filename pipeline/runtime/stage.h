@@ -67,15 +67,22 @@ class Stage {
   virtual void finish(Emitter& /*out*/) {}
 };
 
+// What a source stage made of a slot.
+enum class Produced : std::uint8_t {
+  kFrame,    // the next frame, to pass on
+  kDamaged,  // a frame whose data could not be read (frame index and t_ns set): skipped, counted as damaged
+  kEnd,      // the input ended, or the source was interrupted; the slot is unused
+};
+
 // The first stage: fills slots from an input.
 class SourceStage {
  public:
   virtual ~SourceStage() = default;
   virtual std::string_view name() const = 0;
   virtual void start(const StageContext& /*context*/) {}
-  // Fills the slot with the next frame (message, frame index, t_ns, arrival_ns); false at the end.
-  virtual bool produce(FrameSlot& slot) = 0;
-  // Makes a blocking produce() return false soon; called from another thread.
+  // Fills the slot with the next frame (message, frame index, t_ns, arrival_ns).
+  virtual Produced produce(FrameSlot& slot) = 0;
+  // Makes a blocking produce() return kEnd soon; called from another thread.
   virtual void interrupt() {}
 };
 

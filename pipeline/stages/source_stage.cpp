@@ -33,12 +33,12 @@ bool SourceStageAdapter::waitUntilDue(std::int64_t t_ns, std::int64_t& due_ns) {
   return !interrupted_;
 }
 
-bool SourceStageAdapter::produce(FrameSlot& slot) {
-  if (interrupted_) return false;
+Produced SourceStageAdapter::produce(FrameSlot& slot) {
+  if (interrupted_) return Produced::kEnd;
   DecodedStereoFrame& frame = slot.frame;
   std::int64_t t_ns = 0;
   if (source_.info().kind == SourceKind::kRaw) {
-    if (!source_.next(slot.raw)) return false;
+    if (!source_.next(slot.raw)) return Produced::kEnd;
     t_ns = slot.raw.t_ns;
     frame.t_ns = slot.raw.t_ns;
     frame.frame_index = slot.raw.frame_index;
@@ -56,7 +56,7 @@ bool SourceStageAdapter::produce(FrameSlot& slot) {
       frame.has_motion = false;
     }
   } else {
-    if (!source_.next(slot.encoded)) return false;
+    if (!source_.next(slot.encoded)) return Produced::kEnd;
     t_ns = slot.encoded.t_ns;
     frame.t_ns = slot.encoded.t_ns;
     frame.frame_index = slot.encoded.frame_index;
@@ -65,10 +65,10 @@ bool SourceStageAdapter::produce(FrameSlot& slot) {
   frame.depth_hint_m = 0.0;
   if (options_.realtime) {
     std::int64_t due = 0;
-    if (!waitUntilDue(t_ns, due)) return false;
+    if (!waitUntilDue(t_ns, due)) return Produced::kEnd;
     slot.arrival_ns = due;
   }
-  return true;
+  return Produced::kFrame;
 }
 
 }  // namespace voca::pipeline

@@ -24,7 +24,7 @@ class SourceStageAdapter final : public SourceStage {
  public:
   SourceStageAdapter(StereoSource& source, const SourceStageOptions& options);
   std::string_view name() const override { return "read"; }
-  bool produce(FrameSlot& slot) override;
+  Produced produce(FrameSlot& slot) override;
   void interrupt() override;
 
  private:
