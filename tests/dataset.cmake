@@ -2,3 +2,6 @@
 voca_add_test(test_dataset SOURCES test_dataset.cpp LIBS voca_formats_dataset voca_formats_image fmt::fmt LABELS asan)
 # The same readers on the real EuRoC and KITTI excerpts in ../shared/data.
 voca_add_test(test_dataset_data SOURCES test_dataset_data.cpp LIBS voca_formats_dataset voca_formats_image LABELS e2e)
+# Image datasets replayed as a stereo source: unreadable images are damaged frames, or errors when strict.
+voca_add_test(test_dataset_source SOURCES test_dataset_source.cpp
+              LIBS voca_drivers_source voca_formats_dataset voca_formats_image LABELS asan)

@@ -279,6 +279,50 @@ TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --st
   CHECK(countRows(dir / "strict.txt") == 24);
 }
 
+TEST_CASE("pipeline e2e: an unreadable image in a raw dataset is skipped as damaged; --strict stops naming it") {
+  test::ScratchDir dir("pipeline-damaged-png");
+  const fs::path raw = dir / "raw";
+  copyFolder(rendered().raw, raw);
+  const fs::path png = openDataset(raw).frames[24].left;
+  const std::string bytes = fileText(png);
+  std::ofstream(png, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
+
+  for (const int threads : {1, 0}) {
+    INFO("threads " << threads);
+    pipeline::VoRunOptions options = quietRun(raw, dir / "traj.txt", threads);
+    const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+    REQUIRE_FALSE(result.pipeline.error);
+    // Counted and listed as the video case counts a frame it cannot decode.
+    CHECK(result.pipeline.damaged == 1);
+    REQUIRE(result.pipeline.released.size() == 1);
+    CHECK(result.pipeline.released.front().frame_index == 24);
+    CHECK(result.pipeline.released.front().reason == pipeline::ReleaseReason::kDamaged);
+    CHECK(result.frames == 39);
+    CHECK(countRows(dir / "traj.txt") == 39);
+    bool named = false;
+    for (const std::string& warning : result.warnings) named |= warning.find(png.string()) != std::string::npos;
+    CHECK(named);
+    bool gap_seen = false;
+    for (const pipeline::FrameRecord& row : result.rows) gap_seen |= row.missing_before > 0;
+    CHECK(gap_seen);
+    CHECK(result.backend.resets == 0);
+  }
+
+  // Through the command line: a warning naming the file and exit 0; with --strict an error and exit 1.
+  const std::string run = "run " + raw.string() + " --threads 1 -o " + (dir / "cli.txt").string();
+  const test::CommandOutput skipped = test::runVocaOutput(run);
+  INFO(skipped.text);
+  CHECK(skipped.exit_code == 0);
+  CHECK(skipped.text.find("warning: frame 24 skipped as damaged: " + png.string()) != std::string::npos);
+  CHECK(skipped.text.find("1 damaged: 24(damaged)") != std::string::npos);
+  const test::CommandOutput strict = test::runVocaOutput(run + " --strict");
+  INFO(strict.text);
+  CHECK(strict.exit_code == 1);
+  CHECK(strict.text.find("voca run: error: read stage failed: frame 24 is damaged: " + png.string()) !=
+        std::string::npos);
+  CHECK(countRows(dir / "cli.txt") == 24);
+}
+
 TEST_CASE("pipeline e2e: a source that fails or ends early leaves a clean result") {
   const Dataset dataset = openDataset(rendered().video);
   const StereoRig rig = loadCalibration(*dataset.calibration);

@@ -41,9 +41,17 @@ double medianRate(const Dataset& dataset) {
 
 std::string startNote(std::size_t first) { return first > 0 ? fmt::format(" from frame {}", first) : std::string(); }
 
+// A sequence with many unreadable images would otherwise bury the run's summary in warnings.
+constexpr std::size_t kListedDamaged = 10;
+
+std::string damagedFrameError(std::size_t index, const InputError& error) {
+  return fmt::format("frame {} is damaged: {}", index, error.what());
+}
+
 }  // namespace
 
-ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& options) : dataset_(std::move(dataset)) {
+ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& options)
+    : dataset_(std::move(dataset)), strict_(options.strict) {
   if (dataset_.layout == DatasetLayout::kVocaVideo) {
     throw InputError(dataset_.root.string() + ": a video folder, not an image dataset");
   }
@@ -51,8 +59,20 @@ ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& opt
   if (count_ == 0) throw InputError(dataset_.root.string() + ": no stereo frames");
   index_ = static_cast<std::size_t>(options.first_frame);
   GrayImage left, right;
-  readPngGray(dataset_.frames[index_].left, left);
-  readPngGray(dataset_.frames[index_].right, right);
+  // Non-strict replay takes the size from the first readable pair; next() reports the ones before it.
+  for (std::size_t probe = index_;; ++probe) {
+    try {
+      readPngGray(dataset_.frames[probe].left, left);
+      readPngGray(dataset_.frames[probe].right, right);
+      break;
+    } catch (const InputError& e) {
+      if (strict_) throw InputError(damagedFrameError(probe, e));
+      if (probe + 1 == count_) {
+        throw InputError(fmt::format("{}: no frame of the {} to replay has both images readable; the last: {}",
+                                     dataset_.root.string(), count_ - index_, e.what()));
+      }
+    }
+  }
   if (left.width() != right.width() || left.height() != right.height()) {
     throw InputError(fmt::format("{}: left images are {}x{} but right images {}x{}", dataset_.root.string(),
                                  left.width(), left.height(), right.width(), right.height()));
@@ -69,18 +89,40 @@ ImageDatasetSource::ImageDatasetSource(Dataset dataset, const ReplayOptions& opt
 bool ImageDatasetSource::next(RawStereoFrame& frame) {
   if (interrupted_ || index_ >= count_) return false;
   const StereoFrameRef& ref = dataset_.frames[index_];
-  readPngGray(ref.left, frame.images[0]);
-  readPngGray(ref.right, frame.images[1]);
+  frame.t_ns = ref.t_ns;
+  frame.frame_index = static_cast<std::int64_t>(index_);
+  frame.damaged = false;
+  try {
+    readPngGray(ref.left, frame.images[0]);
+    readPngGray(ref.right, frame.images[1]);
+  } catch (const InputError& e) {
+    // Like a video frame that cannot be decoded: skipped and counted unless the replay is strict.
+    if (strict_) throw InputError(damagedFrameError(index_, e));
+    if (damaged_.size() < kListedDamaged) {
+      damaged_.push_back(fmt::format("frame {} skipped as damaged: {}", index_, e.what()));
+    } else {
+      ++unlisted_damaged_;
+    }
+    frame.damaged = true;
+    ++index_;
+    return true;
+  }
   for (const GrayImage& image : frame.images) {
     if (image.width() != info_.width || image.height() != info_.height) {
       throw InputError(fmt::format("{}: frame {} is {}x{}, the first frame was {}x{}", ref.left.string(), index_,
                                    image.width(), image.height(), info_.width, info_.height));
     }
   }
-  frame.t_ns = ref.t_ns;
-  frame.frame_index = static_cast<std::int64_t>(index_);
   ++index_;
   return true;
+}
+
+std::vector<std::string> ImageDatasetSource::warnings() const {
+  std::vector<std::string> warnings = damaged_;
+  if (unlisted_damaged_ > 0) {
+    warnings.push_back(fmt::format("{} more frames with unreadable images were skipped as damaged", unlisted_damaged_));
+  }
+  return warnings;
 }
 
 VideoFolderSource::VideoFolderSource(Dataset dataset, const ReplayOptions& options)

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "drivers/decode/demuxer.h"
@@ -23,7 +24,9 @@ struct ReplayOptions {
   int first_frame = 0;
   int max_frames = 0;
   // A video that ends before its data.csv does: true throws InputError (naming the camera and the
-  // frame); false ends the replay there and reports it in warnings().
+  // frame); false ends the replay there and reports it in warnings(). An image that cannot be read
+  // (corrupt or vanished PNG): true throws InputError naming the file and the frame; false delivers
+  // the frame marked damaged (the pipeline skips and counts it) and names the file in warnings().
   bool strict = true;
 };
 
@@ -31,19 +34,27 @@ struct ReplayOptions {
 class ImageDatasetSource : public StereoSource {
  public:
   // dataset must not be a video folder. Reads the first pair to learn the image size (InputError
-  // when it cannot be read or the two cameras differ in size).
+  // when it cannot be read or the two cameras differ in size); non-strict replay learns it from the
+  // first pair that can be read.
   ImageDatasetSource(Dataset dataset, const ReplayOptions& options = {});
 
   const SourceInfo& info() const override { return info_; }
   bool next(RawStereoFrame& frame) override;
   void interrupt() override { interrupted_ = true; }
 
+  // Frames skipped as damaged in non-strict replay, each naming its unreadable file (the first
+  // few; then how many more). Call after the replay.
+  std::vector<std::string> warnings() const;
+
  private:
   Dataset dataset_;
+  bool strict_ = true;
   SourceInfo info_;
   std::size_t count_ = 0;
   std::size_t index_ = 0;
   std::atomic<bool> interrupted_{false};
+  std::vector<std::string> damaged_;  // the first kListedDamaged messages
+  std::int64_t unlisted_damaged_ = 0;
 };
 
 // A VOCA video folder: both cameras' packets in lockstep, frame i stamped with data.csv's row i.

@@ -19,6 +19,10 @@ struct RawStereoFrame {
   std::int64_t t_ns = 0;            // sensor time: capture timestamp or the dataset's
   std::int64_t frame_index = 0;     // position in the source from 0; a gap means the source lost frames
   std::array<GrayImage, 2> images;  // cam0 (left), cam1 (right)
+  // The source could not read this frame's images (non-strict replay of an image dataset): t_ns and
+  // frame_index are set, the images are not. The pipeline skips it and counts it as damaged, as it
+  // does a video frame that cannot be decoded.
+  bool damaged = false;
 };
 
 // One compressed access unit per camera, in decode order (DESIGN.md section 2, "EncodedStereoPacket").

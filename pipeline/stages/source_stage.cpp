@@ -42,6 +42,8 @@ Produced SourceStageAdapter::produce(FrameSlot& slot) {
     t_ns = slot.raw.t_ns;
     frame.t_ns = slot.raw.t_ns;
     frame.frame_index = slot.raw.frame_index;
+    // Nothing to pace or hand over: the runner releases it straight away.
+    if (slot.raw.damaged) return Produced::kDamaged;
     if (options_.raw_to_frame) {
       for (int c = 0; c < DecodedStereoFrame::kNumCameras; ++c) {
         const auto i = static_cast<std::size_t>(c);

@@ -203,6 +203,9 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   if (const auto* video = dynamic_cast<const VideoFolderSource*>(source.get())) {
     for (const std::string& warning : video->warnings()) run.warnings.push_back(warning);
   }
+  if (const auto* images = dynamic_cast<const ImageDatasetSource*>(source.get())) {
+    for (const std::string& warning : images->warnings()) run.warnings.push_back(warning);
+  }
   if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
   return run;
 }
