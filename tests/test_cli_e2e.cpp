@@ -2,6 +2,7 @@
 // (KITTI 00-02 are 1241x376) through synth, encode, decode, track, run, eval, bench and demo, on
 // one small sequence so the whole chain costs seconds.
 
+#include <array>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -168,4 +169,37 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   CHECK(countLines(demo / "traj_none.txt") == 30);
   CHECK(countLines(demo / "traj_mv_parallel_of.txt") == 30);
   CHECK(fs::file_size(demo / "overlay_mv_parallel_of.mp4") > 0);
+}
+
+TEST_CASE("voca encode on a folder with a missing and a corrupt image: warning, error on its own line, no folder") {
+  voca::test::ScratchDir dir("cli-encode-bad");
+  const fs::path raw = dir / "raw";
+  {
+    voca::EurocWriter writer(raw);
+    const voca::GrayImage image(64, 48, 90);
+    const std::array<voca::GrayView, 2> views = {image.view(), image.view()};
+    for (std::int64_t i = 1; i <= 8; ++i) writer.addFrame(i * 50'000'000, views);
+    writer.finish();
+  }
+  const voca::Dataset dataset = voca::openDataset(raw);
+  fs::remove(dataset.frames[1].right);
+  // Late enough that the progress line is on screen when the encoding stops.
+  const fs::path corrupt = dataset.frames[6].left;
+  std::ofstream(corrupt, std::ios::binary | std::ios::trunc) << "not a png";
+
+  const fs::path out = dir / "out";
+  const voca::test::CommandOutput result =
+      runVocaOutput("encode " + raw.string() + " --out " + out.string() + " --single-pass");
+  INFO(result.text);
+  CHECK(result.exit_code == 1);
+  // The frame left out is said, as `voca run` says it.
+  CHECK(result.text.find("warning: 1 cam0 images have no cam1 image with the same timestamp and were skipped") !=
+        std::string::npos);
+  // The error starts a line: the progress line before it was ended.
+  const std::size_t error = result.text.find("voca encode: error: " + corrupt.string());
+  REQUIRE(error != std::string::npos);
+  REQUIRE(error > 0);
+  CHECK(result.text[error - 1] == '\n');
+  CHECK(result.text.find("cam0 pass 1/1: frame") < error);
+  CHECK(!fs::exists(out));
 }

@@ -133,15 +133,67 @@ TEST_CASE("dataset problems are InputErrors naming the folder") {
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-calib", calib); }), "nope.json"));
   CHECK(!std::filesystem::exists(dir / "out-calib" / "mav0" / "cam0" / "data.mp4"));
 
-  // A corrupt PNG is reported with its file name.
+  // A corrupt PNG is reported with its file name and frame, and the folder the run made is gone.
   const Dataset raw = openDataset(dir / "raw");
   std::ofstream(raw.frames[1].left, std::ios::binary | std::ios::trunc) << "not a png";
-  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-png", options); }),
-                 raw.frames[1].left.filename().string()));
-  CHECK(!std::filesystem::exists(dir / "out-png" / "mav0" / "cam0" / "data.mp4"));
+  const std::string corrupt = inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-png", options); });
+  CHECK(contains(corrupt, raw.frames[1].left.string() + ": not a PNG file"));
+  CHECK(contains(corrupt, "(frame 1 of cam0)"));
+  CHECK(!std::filesystem::exists(dir / "out-png"));
 
   // An image of another size within one camera.
   writePngGray(raw.frames[1].left, GrayImage(80, 48, 90).view());
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-size", options); }), "80x48"));
   CHECK(!std::filesystem::exists(dir / "out-size" / "mav0" / "cam0" / "data.mp4"));
+}
+
+TEST_CASE("a failed dataset encoding removes what it created and only that; its warnings still arrive") {
+  namespace fs = std::filesystem;
+  test::ScratchDir dir("encode-cleanup");
+  DatasetEncodeOptions options;
+  options.settings = test::testSettings();
+  options.settings.two_pass = false;
+  {
+    EurocWriter writer(dir / "raw");
+    GrayImage image(64, 48, 90);
+    const GrayView views[2] = {image.view(), image.view()};
+    for (std::int64_t t = 1; t <= 5; ++t) writer.addFrame(t * 50000000LL, views);
+    writer.finish();
+  }
+  const Dataset raw = openDataset(dir / "raw");
+  // Frame 1's right image is missing (that frame is left out with a warning), frame 3's cam1 image
+  // is corrupt: cam0 encodes, cam1 fails.
+  fs::remove(raw.frames[1].right);
+  std::ofstream(raw.frames[3].right, std::ios::binary | std::ios::trunc) << "not a png";
+
+  // The warnings come through the callback before the encoding starts, so a failed run shows them.
+  std::vector<std::string> warnings;
+  const auto collect = [&](const std::string& warning) { warnings.push_back(warning); };
+  const std::string error = inputErrorOf([&] { encodeDataset(dir / "raw", dir / "new", options, {}, collect); });
+  CHECK(contains(error, raw.frames[3].right.string()));
+  CHECK(contains(error, "of cam1"));
+  REQUIRE(warnings.size() == 2);
+  CHECK(contains(warnings[0], "1 of 5 rows have no image file and were skipped (data/100000000.png)"));
+  CHECK(contains(warnings[1], "1 cam0 images have no cam1 image"));
+  // The run created the folder: nothing of it is left, not even cam0's finished video.
+  CHECK(!fs::exists(dir / "new"));
+
+  // Into a folder the user already has: their files stay, the run's own additions go.
+  const fs::path user = dir / "user";
+  fs::create_directories(user / "mav0" / "imu0");
+  std::ofstream(user / "notes.txt") << "mine";
+  std::ofstream(user / "mav0" / "imu0" / "data.csv") << "mine too";
+  CHECK(!inputErrorOf([&] { encodeDataset(dir / "raw", user, options); }).empty());
+  CHECK(fs::exists(user / "notes.txt"));
+  CHECK(fs::exists(user / "mav0" / "imu0" / "data.csv"));
+  CHECK(!fs::exists(user / "mav0" / "cam0"));
+  CHECK(!fs::exists(user / "mav0" / "cam1"));
+  CHECK(!fs::exists(user / "calib.json"));
+
+  // The same folder and dataset, repaired: the encoding succeeds and keeps its output.
+  fs::remove(raw.frames[3].right);
+  const DatasetEncodeReport report = encodeDataset(dir / "raw", user, options, {}, collect);
+  CHECK(report.num_frames == 3);
+  CHECK(fs::exists(user / "mav0" / "cam1" / "data.mp4"));
+  CHECK(fs::exists(user / "notes.txt"));
 }

@@ -60,6 +60,41 @@ void createFolder(const fs::path& folder) {
   }
 }
 
+// What one encoding adds to the output folder, taken away again when it fails: a failed run leaves
+// neither an empty folder nor one camera's video without the other's. What was there before stays,
+// except files of the names the run writes, which it overwrites anyway.
+class CreatedOutputs {
+ public:
+  CreatedOutputs() = default;
+  CreatedOutputs(const CreatedOutputs&) = delete;
+  CreatedOutputs& operator=(const CreatedOutputs&) = delete;
+  ~CreatedOutputs() {
+    for (auto it = created_.rbegin(); it != created_.rend(); ++it) {
+      std::error_code ignored;
+      fs::remove_all(*it, ignored);
+    }
+  }
+
+  // Creates the folder and its missing parents, remembering the outermost of them.
+  void folder(const fs::path& folder) {
+    fs::path outermost;
+    for (fs::path p = folder; !p.empty() && !fs::exists(p); p = p.parent_path()) {
+      outermost = p;
+      if (p == p.parent_path()) break;
+    }
+    // Remembered first: a creation that fails half way leaves parents behind too.
+    if (!outermost.empty()) created_.push_back(outermost);
+    createFolder(folder);
+  }
+  // A file the run is about to write.
+  void file(const fs::path& file) { created_.push_back(file); }
+  // The run succeeded: keep everything.
+  void keep() { created_.clear(); }
+
+ private:
+  std::vector<fs::path> created_;
+};
+
 }  // namespace
 
 void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den) {
@@ -91,12 +126,18 @@ void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den) {
 }
 
 DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, const DatasetEncodeOptions& options,
-                                  const DatasetEncodeProgress& progress) {
+                                  const DatasetEncodeProgress& progress, const DatasetEncodeWarning& warn) {
   const Dataset dataset = openDataset(input);
   DatasetEncodeReport report;
   report.input_layout = dataset.layout;
   report.num_frames = static_cast<int>(dataset.frames.size());
-  report.warnings = dataset.warnings;
+  const auto addWarning = [&](std::string warning) {
+    if (warn) warn(warning);
+    report.warnings.push_back(std::move(warning));
+  };
+  // Frames the dataset leaves out (rows without an image, unpaired timestamps) are said before the
+  // long encoding, so they are seen even when it fails.
+  for (const std::string& warning : dataset.warnings) addWarning(warning);
 
   if (options.cameras.empty()) throw InputError("no camera selected (--cameras takes 0, 1 or 0,1)");
   for (std::size_t i = 0; i < options.cameras.size(); ++i) {
@@ -135,10 +176,11 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
     rig = loadCalibration(*dataset.calibration);
   }
 
+  CreatedOutputs created;
   const fs::path mav0 = out / "mav0";
   for (int camera : options.cameras) {
     const fs::path cam_dir = mav0 / fmt::format("cam{}", camera);
-    createFolder(cam_dir);
+    created.folder(cam_dir);
     CameraEncodeReport cam_report;
     cam_report.camera = camera;
     cam_report.video = cam_dir / "data.mp4";
@@ -156,8 +198,15 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
       }
       source = [&, camera](const std::function<void(GrayView)>& emit) {
         GrayImage image;
-        for (const StereoFrameRef& frame : dataset.frames) {
-          readPngGray(camera == 0 ? frame.left : frame.right, image);
+        for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
+          const StereoFrameRef& frame = dataset.frames[i];
+          try {
+            readPngGray(camera == 0 ? frame.left : frame.right, image);
+          } catch (const InputError& e) {
+            // Fatal, unlike `voca run`'s skip: the video and data.csv would silently lack the frame.
+            throw InputError(fmt::format(
+                "{} (frame {} of cam{}); remove the file to leave the frame out with a warning", e.what(), i, camera));
+          }
           emit(image.view());
         }
       };
@@ -170,6 +219,7 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
         emit(image);
       });
     };
+    created.file(cam_report.video);
     cam_report.result =
         encodeVideoFile(cam_report.video, settings, counted, [&](int pass, int num_passes, int frame_index) {
           if (progress) progress(camera, pass, num_passes, frame_index, report.num_frames);
@@ -177,6 +227,7 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
 
     // The frames of the video, in order, with their original timestamps.
     const fs::path csv_path = cam_dir / "data.csv";
+    created.file(csv_path);
     std::ofstream csv(csv_path);
     csv << "#timestamp [ns],filename\n";
     for (const StereoFrameRef& frame : dataset.frames) csv << frame.t_ns << ',' << frame.t_ns << ".png\n";
@@ -191,8 +242,9 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
 
   if (dataset.ground_truth) {
     const fs::path gt_dir = mav0 / "state_groundtruth_estimate0";
-    createFolder(gt_dir);
+    created.folder(gt_dir);
     const fs::path gt_out = gt_dir / "data.csv";
+    created.file(gt_out);
     if (dataset.layout == DatasetLayout::kKitti) {
       // KITTI poses have no timestamps of their own: pair them with times.txt. With a KITTI
       // calibration the body frame is cam0, so the camera pose is the body pose.
@@ -215,20 +267,21 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
       if (cam.camera >= static_cast<int>(rig->cameras.size())) continue;
       const CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
       if (calib.width != cam.result.width || calib.height != cam.result.height) {
-        report.warnings.push_back(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}",
-                                              cam.camera, calib.width, calib.height, cam.result.width,
-                                              cam.result.height));
+        addWarning(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}", cam.camera,
+                               calib.width, calib.height, cam.result.width, cam.result.height));
       }
     }
     const fs::path calib_out = out / "calib.json";
+    created.file(calib_out);
     saveBasaltCalibration(*rig, calib_out);
     report.calibration_written = calib_out;
   } else {
-    report.warnings.push_back("no calibration found with the dataset and none given (--calib): no calib.json written");
+    addWarning("no calibration found with the dataset and none given (--calib): no calib.json written");
   }
   if (options.cameras.size() < 2) {
-    report.warnings.push_back("only one camera encoded: the folder is not a stereo VOCA video dataset");
+    addWarning("only one camera encoded: the folder is not a stereo VOCA video dataset");
   }
+  created.keep();
   return report;
 }
 

@@ -46,6 +46,9 @@ struct DatasetEncodeReport {
 
 // Called per frame: camera, pass (1-based), number of passes, frame index, number of frames.
 using DatasetEncodeProgress = std::function<void(int camera, int pass, int num_passes, int frame, int num_frames)>;
+// Called with each warning as it is found (the dataset's own before the encoding starts); the report
+// lists them all too.
+using DatasetEncodeWarning = std::function<void(const std::string& warning)>;
 
 // The dataset's frame rate as a rational, from the median frame interval: a whole rate when within
 // 0.05 % of one (EuRoC's 20 Hz), an NTSC rate N*1000/1001 likewise, else millihertz precision.
@@ -57,8 +60,11 @@ void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den);
 // (KITTI poses converted to EuRoC csv with times.txt); the calibration, if the dataset or
 // options.calibration provides one, is written as Basalt JSON to <out>/calib.json with the coded
 // image size. Throws InputError for an unknown or missing dataset, bad options, an output folder
-// that cannot be written or that is the input itself.
+// that cannot be written or that is the input itself, and an image that cannot be read (naming it:
+// the video must not silently lack a frame). A failed encoding removes what it created: the output
+// folder if it did not exist, else the folders and files it added.
 DatasetEncodeReport encodeDataset(const std::filesystem::path& input, const std::filesystem::path& out,
-                                  const DatasetEncodeOptions& options, const DatasetEncodeProgress& progress = {});
+                                  const DatasetEncodeOptions& options, const DatasetEncodeProgress& progress = {},
+                                  const DatasetEncodeWarning& warn = {});
 
 }  // namespace voca::encode

@@ -79,18 +79,24 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
   encode_options.settings.bitrate_bps = bitrate_bps;
   encode_options.calibration = calibration;
   encode::silenceCodecLogs();
+  bool line_open = false;
   try {
     encode::encodeDataset(input, out, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
       if (stop_requested && stop_requested()) throw EncodeInterrupted{};
       if (progress && (frame % 50 == 0 || frame + 1 == n)) {
         fmt::print(stderr, "\rencoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
+        line_open = true;
       }
     });
   } catch (const EncodeInterrupted&) {
-    if (progress) fmt::print(stderr, "\n");
+    if (line_open) fmt::print(stderr, "\n");
     return false;
+  } catch (...) {
+    // The caller's error message starts on a line of its own, not after the progress.
+    if (line_open) fmt::print(stderr, "\n");
+    throw;
   }
-  if (progress) fmt::print(stderr, "\n");
+  if (line_open) fmt::print(stderr, "\n");
   return true;
 }
 
