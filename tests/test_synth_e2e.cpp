@@ -186,3 +186,22 @@ TEST_CASE("voca synth rejects bad options with a clear error") {
   // Two sources of motion at once is a usage error (CLI11's own exit code), not a silent choice.
   CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") != 0);
 }
+
+TEST_CASE("voca synth --camera: a path that does not exist is named as not found; other names get the choices") {
+  voca::test::ScratchDir scratch("synth-e2e-camera");
+  for (const std::string camera : {"calib/nonexistent.json", "nonexistent.yaml", "/no/such/mav0"}) {
+    const voca::test::CommandOutput result =
+        voca::test::runVocaOutput("synth --out " + (scratch / "out").string() + " --camera " + camera);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("--camera " + camera + ": calibration file or folder not found") != std::string::npos);
+    CHECK(result.text.find("expected 'euroc'") == std::string::npos);
+  }
+  const voca::test::CommandOutput preset =
+      voca::test::runVocaOutput("synth --out " + (scratch / "out").string() + " --camera eurocc");
+  INFO(preset.text);
+  CHECK(preset.exit_code == 1);
+  CHECK(preset.text.find("--camera 'eurocc': expected 'euroc', 'tumvi' or a calibration file/folder") !=
+        std::string::npos);
+  CHECK(!fs::exists(scratch / "out"));
+}

@@ -33,9 +33,17 @@ constexpr int64_t kStartNs = 1'000'000'000;
 constexpr double kWallClearanceM = 0.5;
 constexpr double kObjectClearanceM = 0.5;
 
+// A name that can only mean a file: not found is the answer to give, not the list of presets.
+bool looksLikePath(const std::string& camera) {
+  const std::string extension = fs::path(camera).extension().string();
+  return camera.find('/') != std::string::npos || extension == ".json" || extension == ".yaml" || extension == ".yml" ||
+         extension == ".txt";
+}
+
 StereoRig loadRig(const std::string& camera) {
   if (std::optional<StereoRig> rig = builtinRig(camera)) return *rig;
   if (!fs::exists(camera)) {
+    if (looksLikePath(camera)) throw InputError("--camera " + camera + ": calibration file or folder not found");
     throw InputError("--camera '" + camera +
                      "': expected 'euroc', 'tumvi' or a calibration file/folder (Basalt .json, Kalibr .yaml, "
                      "EuRoC mav0, KITTI calib.txt)");
