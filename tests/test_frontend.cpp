@@ -532,6 +532,86 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
   CHECK(unbridged[2].correct <= unbridged[2].visible / 4);
 }
 
+TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up beyond the pyramid's reach") {
+  // The image moves 6, 12, ... 42 px in frames 1-7 (and a third of that down): from about 20 px on
+  // the plain track loses its points at this texture's scale, while the previous frame's flow starts
+  // the retry 6 px from the truth.
+  const WaveTexture texture(5, 48, 5.0, 30.0);
+  constexpr int kWidth = PlaneSequence::kWidth, kHeight = PlaneSequence::kHeight;
+  const StereoRig rig = voca::test::pinholeRig(kWidth, kHeight, PlaneSequence::kFocal, PlaneSequence::kBaseline);
+  const double disparity = PlaneSequence::kFocal * PlaneSequence::kBaseline / PlaneSequence::kDepth;
+  struct Frame {
+    TemporalStats stats;
+    int visible = 0;  // previous points whose true position stays inside the image (patch margin)
+    int correct = 0;  // kept points within 0.1 px of the true position
+    std::vector<Eigen::Vector2f> kept;
+  };
+  // Frames 0-7, frame k moving the image by step(k).
+  const auto run = [&](PriorMode mode, bool retry, const std::function<Eigen::Vector2d(int)>& step) {
+    FrontendConfig config;
+    config.prior_mode = mode;
+    config.retry_previous_flow = retry;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame out;
+    FrontendStats stats;
+    std::vector<Frame> frames(8);
+    Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 8; ++k) {
+      if (k > 0) shift += step(k);
+      GrayImage left, right;
+      texture.render(left, kWidth, kHeight, shift.x(), shift.y());
+      texture.render(right, kWidth, kHeight, shift.x() - disparity, shift.y());
+      DecodedStereoFrame in;
+      in.images = {left, right};
+      in.t_ns = k * 50'000'000LL;
+      in.frame_index = k;
+      frontend.track(in, out, stats);
+      Frame& f = frames[static_cast<std::size_t>(k)];
+      f.stats = stats.temporal[0];
+      const Eigen::Vector2f flow = step(k).cast<float>();
+      for (const PointTrace& t : frontend.traces(0)) {
+        const Eigen::Vector2f truth = t.previous_px + flow;
+        f.visible += truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= kWidth - 10.f && truth.y() <= kHeight - 10.f;
+        if (!t.kept) continue;
+        f.correct += (t.tracked_px - truth).norm() < 0.1f;
+        f.kept.push_back(t.tracked_px);
+      }
+    }
+    return frames;
+  };
+  const auto speeding_up = [](int k) { return Eigen::Vector2d(6.0 * k, 2.0 * k); };
+  const auto plain = run(PriorMode::kNone, false, speeding_up);
+  const auto retried = run(PriorMode::kNone, true, speeding_up);
+  for (std::size_t k = 4; k < 8; ++k) {
+    INFO("frame " << k);
+    REQUIRE(plain[k].visible >= 20);
+    CHECK(plain[k].stats.kept <= plain[k].visible / 4);
+    // "Most": 80 % of the points that stay in view, at the true position, nearly all by the retry.
+    CHECK(retried[k].correct >= retried[k].visible * 8 / 10);
+    CHECK(retried[k].stats.flow_retried >= retried[k].correct * 3 / 4);
+    CHECK(retried[k].stats.kept - retried[k].correct <= 2);
+  }
+  // A prior mode on a stream without vectors (raw images): the retry is its last resort too.
+  const auto prior_mode = run(PriorMode::kMvParallelOf, true, speeding_up);
+  CHECK(prior_mode[7].correct >= prior_mode[7].visible * 8 / 10);
+  CHECK(prior_mode[7].stats.flow_retried >= prior_mode[7].correct * 3 / 4);
+  // At a steady 4 px the plain track keeps nearly every point in view, and the retry, started at the
+  // truth, adds only correct ones: a point lost elsewhere than at the border now and then.
+  const auto steady = [](int) { return Eigen::Vector2d(4.0, -1.5); };
+  const auto steady_plain = run(PriorMode::kNone, false, steady);
+  const auto steady_retried = run(PriorMode::kNone, true, steady);
+  int retried_total = 0;
+  for (std::size_t k = 1; k < 8; ++k) {
+    INFO("frame " << k);
+    CHECK(steady_plain[k].correct >= steady_plain[k].visible * 9 / 10);
+    CHECK(steady_retried[k].correct >= steady_plain[k].correct);
+    CHECK(steady_retried[k].stats.kept - steady_retried[k].correct <=
+          steady_plain[k].stats.kept - steady_plain[k].correct);
+    retried_total += steady_retried[k].stats.flow_retried;
+  }
+  CHECK(retried_total <= 3);
+}
+
 TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the finest levels only") {
   // 12 px/frame: the previous position needs the coarse levels, a vector within a pixel does not.
   // 40 px/frame: beyond the plain track's basin (see the bridging test), only the prior tracks.

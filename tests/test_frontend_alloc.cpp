@@ -23,29 +23,40 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     texture.render(left[static_cast<std::size_t>(k)], w, h, 6.0 * k, 2.0 * k);
     texture.render(right[static_cast<std::size_t>(k)], w, h, 6.0 * k - 16.5, 2.0 * k);
   }
+  // And a camera speeding up by 6 px per frame each frame, beyond the plain track's reach after a few
+  // (retry_previous_flow).
+  std::vector<GrayImage> fast_left(num_frames), fast_right(num_frames);
+  for (int k = 0; k < num_frames; ++k) {
+    const double shift = 3.0 * k * (k + 1);
+    texture.render(fast_left[static_cast<std::size_t>(k)], w, h, shift, shift / 3.0);
+    texture.render(fast_right[static_cast<std::size_t>(k)], w, h, shift - 16.5, shift / 3.0);
+  }
   MotionField field(w, h);
   // The five modes, then the paper's mode with the options of our own (presmooth) and of TUM-VI
   // (right-only detection, on a 0.4 m baseline rig so that the right image has cells of its own).
   const StereoRig wide_rig = voca::test::pinholeRig(w, h, 300.0, 0.4);
-  // Last, a still scene with a small capacity: every track survives, the tracker is full each frame
-  // and crowded tracks give way to new points (thin_when_full_px).
-  const std::array<PriorMode, 7> modes = {PriorMode::kNone,        PriorMode::kMv,           PriorMode::kOfThenMv,
-                                          PriorMode::kMvThenOf,    PriorMode::kMvParallelOf, PriorMode::kMvParallelOf,
-                                          PriorMode::kMvParallelOf};
-  for (int run = 0; run < 7; ++run) {
+  // Then a still scene with a small capacity: every track survives, the tracker is full each frame
+  // and crowded tracks give way to new points (thin_when_full_px). Last, the speeding-up camera with
+  // the retry from the previous image flow.
+  const std::array<PriorMode, 8> modes = {PriorMode::kNone,         PriorMode::kMv,           PriorMode::kOfThenMv,
+                                          PriorMode::kMvThenOf,     PriorMode::kMvParallelOf, PriorMode::kMvParallelOf,
+                                          PriorMode::kMvParallelOf, PriorMode::kNone};
+  for (int run = 0; run < 8; ++run) {
     const PriorMode mode = modes[static_cast<std::size_t>(run)];
     FrontendConfig config;
     config.prior_mode = mode;
     config.presmooth = run == 5;
     config.detection_nonoverlap = run == 5;
     config.thin_when_full_px = run == 6 ? 50.0 : 0.0;
+    config.retry_previous_flow = run == 7;
     KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = run == 6 ? 30 : 300});
     TrackedStereoFrame out;
     FrontendStats stats;
     DecodedStereoFrame in;
     in.reserve(w, h);
     long steady_allocations = 0, first_frame_allocations = 0;
-    int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0, thinned_after_start = 0;
+    int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0, thinned_after_start = 0,
+        retried_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
       const long before = voca::test::g_allocations.load();
       // Every third frame is an I-frame, so bridging copies run inside the window too.
@@ -58,8 +69,8 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
       field.finalize();
       // Filling the message reuses its buffers (sized before the loop), as the pipeline's slots do.
       const auto image = static_cast<std::size_t>(run == 6 ? 0 : k);
-      in.images[0] = left[image];
-      in.images[1] = right[image];
+      in.images[0] = run == 7 ? fast_left[image] : left[image];
+      in.images[1] = run == 7 ? fast_right[image] : right[image];
       in.motion[0].copyFrom(field);
       in.motion[1].copyFrom(field);
       in.has_motion = true;
@@ -72,11 +83,13 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
         detected_after_start += stats.detected;
         right_only_after_start += stats.detected_right_only;
         thinned_after_start += stats.thinned;
+        retried_after_start += stats.temporal[0].flow_retried + stats.temporal[1].flow_retried;
         tracked_after_start += stats.temporal[0].kept + stats.temporal[1].kept;
       }
     }
     INFO("mode " << priorModeName(mode) << (run == 5 ? " with presmooth and detection_nonoverlap" : "")
-                 << (run == 6 ? " with thin_when_full_px on a still scene" : ""));
+                 << (run == 6 ? " with thin_when_full_px on a still scene" : "")
+                 << (run == 7 ? " with retry_previous_flow, speeding up" : ""));
     CHECK(steady_allocations == 0);
     // The counter sees the operator new calls: the first frame reserves the output buffers.
     CHECK(first_frame_allocations > 0);
@@ -85,5 +98,6 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     CHECK(tracked_after_start > 100);
     if (run == 5) CHECK(right_only_after_start > 0);
     if (run == 6) CHECK(thinned_after_start > 0);
+    if (run == 7) CHECK(retried_after_start > 100);
   }
 }

@@ -62,6 +62,11 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.thin_when_full_px == 8.0);
   CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.thin_when_full_px == 8.0);
   CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
+  // Ours, measured and off in every file (configs/README.md): for low frame rates and fast cameras.
+  CHECK_FALSE(e.retry_previous_flow);
+  CHECK_FALSE(tumvi.frontend.retry_previous_flow);
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_previous_flow": true}})"), "x")
+            .frontend.retry_previous_flow);
   CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
@@ -148,6 +153,9 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.prior_rescue_min_px: expected a number in [0,"));
   message = errorFor(R"({"frontend": {"thin_when_full_px": -2}})");
   CHECK(contains(message, "frontend.thin_when_full_px: expected a number in [0,"));
+
+  message = errorFor(R"({"frontend": {"retry_previous_flow": 1}})");
+  CHECK(contains(message, "frontend.retry_previous_flow: expected"));
 
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));

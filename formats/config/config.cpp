@@ -60,6 +60,7 @@ const FrontendField kFrontendFields[] = {
     {"backward_pyramid_levels", &FrontendConfig::backward_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
     {"thin_when_full_px", &FrontendConfig::thin_when_full_px},
+    {"retry_previous_flow", &FrontendConfig::retry_previous_flow},
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},

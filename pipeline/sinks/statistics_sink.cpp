@@ -70,6 +70,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
     f.with_vector += t.with_vector;
     f.distrusted += t.distrusted;
     f.prior_confirmed += t.prior_confirmed;
+    f.flow_retried += t.flow_retried;
   }
   f.detected += s.detected;
   f.detected_right_only += s.detected_right_only;

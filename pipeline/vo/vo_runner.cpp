@@ -433,6 +433,10 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
              "I-frames: {}\n",
              t.rescued, static_cast<double>(t.rescued) / frames, t.consensus, static_cast<double>(t.consensus) / frames,
              t.bridged_frames);
+  if (config.retry_previous_flow) {
+    fmt::print(out, "kept by the retry from the previous image flow (retry_previous_flow): {} ({:.2f} per frame)\n",
+               t.flow_retried, static_cast<double>(t.flow_retried) / frames);
+  }
   fmt::print(out, "new points: {:.1f} per frame, {:.1f} % matched in the right image; epipolar rejections: {}\n",
              static_cast<double>(t.detected) / frames, pct(t.stereo_matched, t.detected), t.epipolar);
   if (config.detection_nonoverlap) {
@@ -513,6 +517,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"with_vector", t.with_vector},
                    {"distrusted_vectors", t.distrusted},
                    {"prior_tracks_confirmed", t.prior_confirmed},
+                   {"flow_retried", t.flow_retried},
                    {"detected", t.detected},
                    {"detected_right_only", t.detected_right_only},
                    {"thinned", t.thinned},

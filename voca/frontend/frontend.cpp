@@ -82,6 +82,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&cam.flow_x, &cam.flow_y}) v->reserve(static_cast<std::size_t>(max_points_));
     cam.traces.reserve(static_cast<std::size_t>(max_points_));
     // Live points plus two scratch slots (the plain and the prior backward track of one point).
     cam.num_levels = num_levels_;
@@ -161,6 +162,7 @@ void KltFrontend::reset() {
     cam.resetSlots();
     cam.traces.clear();
     cam.bridge.clear();
+    cam.previous_flow.setZero();
   }
   have_previous_ = false;
 }
@@ -269,6 +271,10 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   // that missed by a few pixels needs the coarse levels (measured: shortened there, it loses them).
   const bool whole_pyramid = stats.bridged[static_cast<std::size_t>(camera)] || mode == PriorMode::kOfThenMv;
   const int prior_levels = whole_pyramid ? all_levels : prior_levels_;
+  // retry_previous_flow: a flow under a pixel would start the retry where the plain track started.
+  const bool retry_flow = config_.retry_previous_flow && cam.previous_flow.squaredNorm() >= 1.f;
+  cam.flow_x.clear();
+  cam.flow_y.clear();
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
@@ -351,6 +357,12 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok && !same_start;
       if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_levels, prior_slot, prior_px);
     }
+    // The last resort of every mode (retry_previous_flow): from the same start it would fail again.
+    bool flow_ok = false;
+    Eigen::Vector2f flow_px = p + cam.previous_flow;
+    if (!plain_ok && !prior_ok && retry_flow && (!has_vector || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
+      flow_ok = attempt(cam.previous_flow, all_levels, plain_slot, flow_px);
+    }
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
 
@@ -373,6 +385,10 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       keep_prior = true;
       result = prior_px;
       ts.rescued += run_plain;  // the plain track was tried and failed
+    } else if (flow_ok) {
+      keep = true;
+      result = flow_px;
+      ++ts.flow_retried;
     }
     // The kept result's backward templates become the point's templates; everything else is freed.
     cam.release(forward_slot);
@@ -392,6 +408,10 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       continue;
     }
     ++ts.kept;
+    if (config_.retry_previous_flow) {
+      cam.flow_x.push_back(result.x() - p.x());
+      cam.flow_y.push_back(result.y() - p.y());
+    }
     cam.next_ids.push_back(cam.ids[i]);
     cam.next_points.push_back(result);
     cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
@@ -403,6 +423,16 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
   std::swap(cam.slots, cam.next_slots);
+  // The image flow the next frame's retries start from. With no track kept it stays what it was:
+  // the camera's last known motion beats none.
+  if (!cam.flow_x.empty()) {
+    const auto median = [](std::vector<float>& v) {
+      const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+      std::nth_element(v.begin(), mid, v.end());
+      return *mid;
+    };
+    cam.previous_flow = Eigen::Vector2f(median(cam.flow_x), median(cam.flow_y));
+  }
 }
 
 void KltFrontend::thinTracks(FrontendStats& stats) {

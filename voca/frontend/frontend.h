@@ -35,7 +35,8 @@ struct TemporalStats {
   int tracked_prior = 0;  // successful tracks started from the MV prior
   int kept = 0;
   int lost = 0;
-  int rescued = 0;  // kept from the prior after the plain track was tried and failed
+  int rescued = 0;       // kept from the prior after the plain track was tried and failed
+  int flow_retried = 0;  // kept from the previous frame's image flow after every other guess failed
   int consensus_rejections = 0;
   int distrusted = 0;       // vectors the codec-confidence checks rejected (counted in with_vector too)
   int prior_confirmed = 0;  // prior tracks not run: the vector landed near the plain track's result
@@ -107,6 +108,10 @@ class KltFrontend {
     std::vector<int> free_slots;
     int num_levels = 0;
     IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
+    // retry_previous_flow: the median displacement of the last temporal step's kept tracks (zero
+    // before any), and that step's displacements per axis as scratch for the median.
+    Eigen::Vector2f previous_flow = Eigen::Vector2f::Zero();
+    std::vector<float> flow_x, flow_y;
     std::vector<PointTrace> traces;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }

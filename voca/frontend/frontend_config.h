@@ -117,6 +117,13 @@ struct FrontendConfig {
   // texture: near-duplicates that weigh one error twice, age without end and keep every fresh point
   // out. Basalt has no capacity, so it never gets here; 0 = never drop.
   double thin_when_full_px = 0.0;
+  // A point every guess lost (the previous position, and the motion vector where the mode has one)
+  // gets one more track, started where the camera's image flow of the previous frame would put it:
+  // the median displacement of that frame's kept tracks. Plain KLT reaches only as far as its
+  // coarsest level; when the camera moves faster than that (a low frame rate, a fast turn) every
+  // point is lost at once and the estimator has nothing to work with. Flow shorter than a pixel is
+  // not retried (that track would start where the plain one did). Not in Basalt or the paper.
+  bool retry_previous_flow = false;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
   // patterns' 2 px sample grid has on sharp images (see ImagePyramid). Not in Basalt or the paper.
   bool presmooth = false;
