@@ -12,6 +12,7 @@
 #include <chrono>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -321,6 +322,39 @@ TEST_CASE("pipeline e2e: an unreadable image in a raw dataset is skipped as dama
   CHECK(strict.text.find("voca run: error: read stage failed: frame 24 is damaged: " + png.string()) !=
         std::string::npos);
   CHECK(countRows(dir / "cli.txt") == 24);
+}
+
+TEST_CASE("pipeline e2e: a failure where the tracker lost most points hints at retry_previous_flow, once") {
+  // Twelve frames cut out of the fast sequence: the image jumps far beyond the pyramid's reach.
+  test::ScratchDir dir("pipeline-jump");
+  const fs::path raw = dir / "raw";
+  copyFolder(rendered().raw, raw);
+  for (const char* cam : {"cam0", "cam1"}) {
+    const fs::path csv = raw / "mav0" / cam / "data.csv";
+    std::istringstream in(fileText(csv));
+    std::ofstream out(csv, std::ios::trunc);
+    int row = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line[0] != '#' && row++ >= 20 && row <= 32) continue;
+      out << line << '\n';
+    }
+  }
+  const std::string run = "run " + raw.string() + " --mode none --threads 1 -o " + (dir / "traj.txt").string();
+  const test::CommandOutput plain = test::runVocaOutput(run);
+  INFO(plain.text);
+  REQUIRE(plain.exit_code == 0);
+  REQUIRE(plain.text.find("reset (too few inliers)") != std::string::npos);
+  const std::size_t hint = plain.text.find("hint: the tracker lost ");
+  CHECK(hint != std::string::npos);
+  CHECK(plain.text.find("\"retry_previous_flow\": true", hint) != std::string::npos);
+  CHECK(plain.text.find("hint: ", hint + 1) == std::string::npos);
+  // With the key set there is nothing to suggest.
+  const fs::path config = dir / "retry.json";
+  std::ofstream(config) << R"({"frontend": {"retry_previous_flow": true}})";
+  const test::CommandOutput retried = test::runVocaOutput(run + " --config " + config.string());
+  INFO(retried.text);
+  CHECK(retried.exit_code == 0);
+  CHECK(retried.text.find("hint: ") == std::string::npos);
 }
 
 TEST_CASE("pipeline e2e: a source that fails or ends early leaves a clean result") {

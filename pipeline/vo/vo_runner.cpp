@@ -34,13 +34,20 @@ struct EncodeInterrupted {};
 // Progress on stderr: a line every few frames, and one per frame that was not tracked.
 class ProgressSink final : public FrameSink {
  public:
-  ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage)
-      : total_(total), estimate_(estimate), frontend_stage_(frontend_stage), backend_stage_(backend_stage) {}
+  // suggest_flow_retry: the frontend runs without retry_previous_flow, so a failure where the
+  // temporal step lost most points gets a hint at that key, once.
+  ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry)
+      : total_(total),
+        estimate_(estimate),
+        frontend_stage_(frontend_stage),
+        backend_stage_(backend_stage),
+        suggest_flow_retry_(suggest_flow_retry) {}
   void consume(const FrameSlot& slot) override {
     ++frames_;
     if (estimate_ && slot.pose.state != TrackingState::kTracking) {
       fmt::print(stderr, "\nframe {}: {} ({})\n", slot.frame.frame_index, trackingStateName(slot.pose.state),
                  failureReasonName(slot.pose.failure));
+      hintAtFlowRetry(slot);
     }
     if (frames_ % 20 != 0 && frames_ != total_) return;
     const auto ms = [&](int stage) {
@@ -60,12 +67,30 @@ class ProgressSink final : public FrameSink {
   }
 
  private:
+  // Most points lost in one step is image motion beyond the pyramid's reach more often than not
+  // (a low frame rate, a fast turn): configs/README.md, "Faster than the pyramid reaches".
+  void hintAtFlowRetry(const FrameSlot& slot) {
+    constexpr int kMinPoints = 20;
+    const TemporalStats& t = slot.frontend_stats.temporal[0];
+    if (!suggest_flow_retry_ || slot.pose.failure != FailureReason::kTooFewInliers || t.previous < kMinPoints ||
+        4 * t.kept >= t.previous)
+      return;
+    suggest_flow_retry_ = false;
+    fmt::print(stderr,
+               "hint: the tracker lost {} of {} points from the previous frame: the image may move faster than the "
+               "KLT pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the "
+               "config's frontend section (configs/README.md), or track a video with motion vectors in a prior "
+               "mode.\n",
+               t.previous - t.kept, t.previous);
+  }
+
   // "12/300", or "12" for live input of unknown length.
   std::string count() const { return total_ > 0 ? fmt::format("{}/{}", frames_, total_) : fmt::format("{}", frames_); }
 
   std::int64_t total_;
   bool estimate_;
   int frontend_stage_, backend_stage_;
+  bool suggest_flow_retry_;
   std::int64_t frames_ = 0;
   bool printed_ = false;
 };
@@ -302,8 +327,8 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   }
   std::unique_ptr<ProgressSink> progress;
   if (options.progress) {
-    progress =
-        std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position);
+    progress = std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position,
+                                              backend_position, !result.config.frontend.retry_previous_flow);
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
