@@ -49,7 +49,7 @@ class CameraStereoSource : public StereoSource {
   SourceCounters counters() const override;
 
   // Problems that did not stop the capture (from the devices), for the user.
-  std::vector<std::string> warnings() const;
+  std::vector<std::string> warnings() const override;
   std::int64_t pairToleranceNs() const { return tolerance_ns_; }
 
  private:

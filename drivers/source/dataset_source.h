@@ -43,8 +43,8 @@ class ImageDatasetSource : public StereoSource {
   void interrupt() override { interrupted_ = true; }
 
   // Frames skipped as damaged in non-strict replay, each naming its unreadable file (the first
-  // few; then how many more). Call after the replay.
-  std::vector<std::string> warnings() const;
+  // few; then how many more).
+  std::vector<std::string> warnings() const override;
 
  private:
   Dataset dataset_;
@@ -70,7 +70,7 @@ class VideoFolderSource : public StereoSource {
   void interrupt() override { interrupted_ = true; }
 
   // Problems that ended the replay early in non-strict mode (a truncated video).
-  const std::vector<std::string>& warnings() const { return warnings_; }
+  std::vector<std::string> warnings() const override { return warnings_; }
 
  private:
   Dataset dataset_;

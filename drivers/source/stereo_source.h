@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "drivers/decode/demuxer.h"
 #include "voca/core/image.h"
@@ -77,6 +78,9 @@ class StereoSource {
 
   virtual void interrupt() {}
   virtual SourceCounters counters() const { return {}; }
+  // Problems that did not stop the source (frames skipped as damaged, a video that ended early, a
+  // device's notes), for the run's summary; read after the input ends.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 }  // namespace voca

@@ -16,11 +16,6 @@ namespace {
 
 constexpr std::string_view kLibcameraPrefix = "libcamera:";
 
-std::vector<std::string> warningsOf(const StereoSource& source) {
-  if (const auto* v4l2 = dynamic_cast<const capture::CameraStereoSource*>(&source)) return v4l2->warnings();
-  return {};
-}
-
 }  // namespace
 
 std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& options, platform::V4l2Io& io) {
@@ -61,7 +56,7 @@ VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, platform
   const std::unique_ptr<StereoSource> source = openCameras(options.cameras, io);
   VoRunResult result = runVisualOdometryOn(*source, rig, config.config, options.run);
   result.config_name = config.name;
-  const std::vector<std::string> warnings = warningsOf(*source);
+  const std::vector<std::string> warnings = source->warnings();
   result.warnings.insert(result.warnings.begin(), warnings.begin(), warnings.end());
   if (!options.run.statistics_file.empty()) writeStatisticsJson(result, options.run.statistics_file);
   return result;
@@ -82,7 +77,7 @@ CameraRecordResult recordFromCameras(const CameraRecordOptions& options, platfor
   CameraRecordResult result;
   result.description = source->info().description;
   result.report = encode::recordStereo(*source, options.out, record);
-  result.warnings = warningsOf(*source);
+  result.warnings = source->warnings();
   return result;
 }
 

@@ -231,12 +231,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
                                   options.encode_bitrate_bps / 1000, run.description);
   }
   run.warnings.insert(run.warnings.begin(), result.warnings.begin(), result.warnings.end());
-  if (const auto* video = dynamic_cast<const VideoFolderSource*>(source.get())) {
-    for (const std::string& warning : video->warnings()) run.warnings.push_back(warning);
-  }
-  if (const auto* images = dynamic_cast<const ImageDatasetSource*>(source.get())) {
-    for (const std::string& warning : images->warnings()) run.warnings.push_back(warning);
-  }
+  for (const std::string& warning : source->warnings()) run.warnings.push_back(warning);
   if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
   return run;
 }
