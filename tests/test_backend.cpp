@@ -476,6 +476,33 @@ TEST_CASE("backend: LM judges steps by the plain cost, and the window's cost nev
   CHECK(checked >= 8);
 }
 
+TEST_CASE("backend: a step that LM expects to converge is judged by a cost pass, not by a linearisation") {
+  // Converging early (here at a 0.1 % decrease), the loop ends or goes to the outlier filter after
+  // the step: a linearisation to judge it by would go unused. Each iteration then costs one
+  // linearisation; before, every early stop cost one more.
+  const StereoRig rig = synth::eurocRig();
+  SyntheticObservationsConfig sc;
+  sc.noise_px = 0.5;
+  sc.seed = 3;
+  sc.duration_s = 4.0;
+  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
+  BackendConfig config;
+  config.converged_relative_decrease = 1e-3;
+  VoEstimator estimator(config, rig);
+  int iterations = 0, linearizations = 0, early = 0;
+  for (const TrackedStereoFrame& frame : seq.frames) {
+    const PoseEstimate estimate = estimator.process(frame);
+    REQUIRE(estimate.state != TrackingState::kLost);
+    iterations += estimate.lm_iterations;
+    linearizations += estimate.lm_linearizations;
+    early += estimate.lm_iterations > 0 && estimate.lm_iterations < config.max_iterations;
+  }
+  MESSAGE(seq.frames.size() << " frames: " << iterations << " LM iterations, " << linearizations << " linearisations, "
+                            << early << " frames stopped early");
+  REQUIRE(early > static_cast<int>(seq.frames.size()) / 2);  // the case this is about
+  CHECK(linearizations <= iterations);
+}
+
 TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
   const StereoRig rig = synth::eurocRig();
   const SyntheticObservations seq = shortNoiseFreeSequence(rig);

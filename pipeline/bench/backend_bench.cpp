@@ -48,7 +48,7 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
   timing.warmup = warmup;
   timing.cpu_ms.reserve(frames.size() - warmup);
   VoEstimator estimator(config, rig);
-  double window = 0.0, points = 0.0, inliers = 0.0;
+  double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0;
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const std::int64_t start = platform::threadCpuNs();
     const PoseEstimate& estimate = estimator.process(frames[k]);
@@ -60,12 +60,16 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
     window += estimate.num_keyframes;
     points += static_cast<double>(frames[k].observations[0].size());
     inliers += estimate.num_inliers;
+    iterations += estimate.lm_iterations;
+    linearizations += estimate.lm_linearizations;
     ++timing.measured;
   }
   const double n = static_cast<double>(timing.measured);
   timing.mean_window_keyframes = window / n;
   timing.mean_left_points = points / n;
   timing.mean_inliers = inliers / n;
+  timing.mean_lm_iterations = iterations / n;
+  timing.mean_linearizations = linearizations / n;
   return timing;
 }
 

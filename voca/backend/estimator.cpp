@@ -386,6 +386,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
     est.new_landmarks = backend::triangulateNewLandmarks(n, window_, landmarks_, model_, config_);
   }
   est.lm_iterations = optimizer_.optimize(state(), config_.max_iterations, true);
+  est.lm_linearizations = optimizer_.linearizations();
 
   frameStats(n, est);
   const SE3d& T_w_c = window_[n].T_w_c;

@@ -55,6 +55,7 @@ struct PoseEstimate {
   int num_outliers = 0;   // this frame's observations removed as outliers
   int new_landmarks = 0;  // triangulated in this frame (keyframes only)
   int lm_iterations = 0;
+  int lm_linearizations = 0;         // of the window, in those iterations
   double rms_reprojection_px = 0.0;  // this frame's inliers
   double mean_depth_m = 0.0;         // of the landmarks this frame observes (0 when none)
   double time_ms = 0.0;

@@ -250,7 +250,13 @@ void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVecto
   }
 }
 
+double WindowOptimizer::linearizeCounted(const WindowState& state) {
+  ++linearizations_;
+  return linearize(state, nullptr, false);
+}
+
 int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool filter) {
+  linearizations_ = 0;
   double lambda = config_.lm_lambda_initial;
   bool filtered = !filter;
   const std::vector<int>& alive = state.landmarks.alive();
@@ -270,8 +276,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       filtered = true;
       linearized = false;
     }
-    if (!linearized) current = linearize(state, nullptr, false);
-    const bool linearize_next = it + 1 < max_iterations && (filtered || it + 1 < config_.filter_iteration);
+    if (!linearized) current = linearizeCounted(state);
+    const bool next_iteration_here = it + 1 < max_iterations && (filtered || it + 1 < config_.filter_iteration);
     linearized = false;
     bool accepted = false;
     bool converged = false;
@@ -316,9 +322,17 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
       ldlt_.compute(H_reduced_);
       dx_ = ldlt_.solve(-b_reduced_);
       if (dx_.allFinite()) {
+        // A step the quadratic model expects to lower the cost by less than the convergence bound
+        // most likely ends the loop (or leads to the outlier filter, after which everything is
+        // linearised anew): it is judged by a cost pass, not by a linearisation that would go
+        // unused. -b.dx is twice the Gauss-Newton model's decrease. Only the work differs: both
+        // passes give the same cost to the bit, so every decision and result is the same.
+        const double model_decrease = -0.5 * b_reduced_.dot(dx_);
+        const bool linearize_next =
+            next_iteration_here && model_decrease > config_.converged_relative_decrease * current;
         backup(state);
         applyIncrement(state, dx_);
-        const double next = linearize_next ? linearize(state, nullptr, false) : cost(state, outliers);
+        const double next = linearize_next ? linearizeCounted(state) : cost(state, outliers);
         if (std::isfinite(next) && next <= current) {
           accepted = true;
           outliers_ready = !linearize_next && !filtered;
@@ -331,7 +345,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         restore(state);
         // The next attempt eliminates and back-substitutes with the linearisation of the restored
         // state, which the rejected step's pass overwrote (rare: almost every step is accepted).
-        if (linearize_next) linearize(state, nullptr, false);
+        if (linearize_next) linearizeCounted(state);
       }
       if (!config_.use_lm || lambda >= config_.lm_lambda_max) break;
       lambda = std::min(config_.lm_lambda_max, lambda * 10.0);

@@ -55,6 +55,8 @@ class WindowOptimizer {
   // Up to max_iterations LM iterations; with `filter`, outliers are removed at filter_iteration (or
   // on convergence, whichever comes first). Returns the iterations run.
   int optimize(const WindowState& state, int max_iterations, bool filter);
+  // Linearisations (passes over the residuals with Jacobians) of the last optimize(): most of its time.
+  int linearizations() const { return linearizations_; }
   // Removes observations off by more than the outlier threshold; landmarks whose host view is an
   // outlier, that keep too few views or whose depth left the valid range die.
   void filterOutliers(const WindowState& state) const;
@@ -102,6 +104,8 @@ class WindowOptimizer {
   double residualCost(bool projected, double e) const;
   // The landmarks' costs summed in the one order cost() and linearize() share, plus the prior's.
   double totalCost(const WindowState& state, std::size_t count) const;
+  // linearize() of the whole window, counted in linearizations_.
+  double linearizeCounted(const WindowState& state);
   static void backup(const WindowState& state);
   static void restore(const WindowState& state);
   void applyIncrement(const WindowState& state, const WindowVector& dx);
@@ -110,6 +114,7 @@ class WindowOptimizer {
   StereoResiduals model_;
   std::vector<LandmarkLin> lin_;  // by position in the landmark list of the last linearize()
   std::vector<Mat63> H_pl_;
+  int linearizations_ = 0;
   std::vector<std::uint32_t> outliers_;  // cost(state, outliers_.data()) before the filter
   // J_host^T W J_host and J_host^T W r summed per (host, target) frame pair, at host * slots + target;
   // valid where the host's bit mask in targets_of_host_ has the target.
