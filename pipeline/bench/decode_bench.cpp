@@ -12,6 +12,7 @@
 #include "drivers/encode/dataset_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "platform/realtime/clock.h"
+#include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
 
@@ -205,6 +206,7 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
   // Variants interleaved per repeat so slow drifts of the machine affect all alike. CPU time of this
   // thread is not inflated when other processes share the cores, so it measures the work itself.
   for (DecodeVariantResult& v : result.variants) v.frame_cpu_ms.reserve(result.packets * opts.repeat);
+  platform::ProgressLine progress;
   for (int r = 0; r < opts.repeat; ++r) {
     for (std::size_t v = 0; v < variants.size(); ++v) {
       const auto start = std::chrono::steady_clock::now();
@@ -212,9 +214,9 @@ DecodeBenchResult runDecodeBench(const DecodeBenchOptions& opts) {
       const double elapsed = seconds(std::chrono::steady_clock::now() - start);
       result.variants[v].run_wall_fps.push_back(result.frames / std::max(elapsed, 1e-9));
     }
-    if (opts.progress) fmt::print(stderr, "\rrepeat {}/{}", r + 1, opts.repeat);
+    if (opts.progress) progress.update("repeat {}/{}", r + 1, opts.repeat);
   }
-  if (opts.progress) fmt::print(stderr, "\n");
+  progress.end();
   for (DecodeVariantResult& v : result.variants) {
     v.median_ms = median(v.frame_cpu_ms);
     v.p99_ms = quantile(v.frame_cpu_ms, 0.99);

@@ -14,6 +14,7 @@
 #include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"
 #include "formats/trajectory/trajectory_io.h"
+#include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
 #include "voca/synth/renderer.h"
@@ -214,6 +215,7 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   EurocWriter writer(options.out, 2);
   std::vector<GrayImage> images(2);
   auto last_report = std::chrono::steady_clock::now();
+  platform::ProgressLine progress;
   const CameraCalibration& cam0 = rig.cameras[0];
   const Project project_cam0 = [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
     return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width && uv.y() < cam0.height;
@@ -223,7 +225,6 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   std::vector<double> blur_px;
   for (int k = 0; k < frames; ++k) {
     if (options.stop_requested && options.stop_requested()) {
-      if (options.progress) fmt::print(stderr, "\n");
       SynthResult stopped;
       stopped.frames = k;
       stopped.stopped = true;
@@ -265,12 +266,12 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
     const auto now = std::chrono::steady_clock::now();
     if (options.progress && (k + 1 == frames || now - last_report > std::chrono::seconds(2))) {
       const double elapsed = std::chrono::duration<double>(now - start).count();
-      fmt::print(stderr, "\rvoca synth: frame {}/{}  {:.1f} s elapsed, {:.1f} s left   ", k + 1, frames, elapsed,
-                 elapsed / (k + 1) * (frames - k - 1));
+      progress.update("voca synth: frame {}/{}  {:.1f} s elapsed, {:.1f} s left", k + 1, frames, elapsed,
+                      elapsed / (k + 1) * (frames - k - 1));
       last_report = now;
     }
   }
-  if (options.progress) fmt::print(stderr, "\n");
+  progress.end();
   writer.finish();
 
   Trajectory ground_truth;

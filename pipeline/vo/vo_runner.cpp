@@ -22,6 +22,7 @@
 #include "pipeline/stages/source_stage.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/realtime/stop_signal.h"
+#include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {
@@ -45,8 +46,8 @@ class ProgressSink final : public FrameSink {
   void consume(const FrameSlot& slot) override {
     ++frames_;
     if (estimate_ && slot.pose.state != TrackingState::kTracking) {
-      fmt::print(stderr, "\nframe {}: {} ({})\n", slot.frame.frame_index, trackingStateName(slot.pose.state),
-                 failureReasonName(slot.pose.failure));
+      line_.message(fmt::format("frame {}: {} ({})", slot.frame.frame_index, trackingStateName(slot.pose.state),
+                                failureReasonName(slot.pose.failure)));
       hintAtFlowRetry(slot);
     }
     if (frames_ % 20 != 0 && frames_ != total_) return;
@@ -55,16 +56,13 @@ class ProgressSink final : public FrameSink {
       return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
     };
     if (estimate_) {
-      fmt::print(stderr, "\rframe {}: {} landmarks, {} keyframes in the window, {:.1f} + {:.1f} ms   ", count(),
-                 slot.pose.num_landmarks, slot.pose.num_keyframes, ms(frontend_stage_), ms(backend_stage_));
+      line_.update("frame {}: {} landmarks, {} keyframes in the window, {:.1f} + {:.1f} ms", count(),
+                   slot.pose.num_landmarks, slot.pose.num_keyframes, ms(frontend_stage_), ms(backend_stage_));
     } else {
-      fmt::print(stderr, "\rtracked {} frames   ", count());
+      line_.update("tracked {} frames", count());
     }
-    printed_ = true;
   }
-  void finish() override {
-    if (printed_) fmt::print(stderr, "\n");
-  }
+  void finish() override { line_.end(); }
 
  private:
   // Most points lost in one step is image motion beyond the pyramid's reach more often than not
@@ -76,12 +74,12 @@ class ProgressSink final : public FrameSink {
         4 * t.kept >= t.previous)
       return;
     suggest_flow_retry_ = false;
-    fmt::print(stderr,
-               "hint: the tracker lost {} of {} points from the previous frame: the image may move faster than the "
-               "KLT pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the "
-               "config's frontend section (configs/README.md), or track a video with motion vectors in a prior "
-               "mode.\n",
-               t.previous - t.kept, t.previous);
+    line_.message(
+        fmt::format("hint: the tracker lost {} of {} points from the previous frame: the image may move faster than "
+                    "the KLT pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the "
+                    "config's frontend section (configs/README.md), or track a video with motion vectors in a prior "
+                    "mode.",
+                    t.previous - t.kept, t.previous));
   }
 
   // "12/300", or "12" for live input of unknown length.
@@ -92,7 +90,7 @@ class ProgressSink final : public FrameSink {
   int frontend_stage_, backend_stage_;
   bool suggest_flow_retry_;
   std::int64_t frames_ = 0;
-  bool printed_ = false;
+  platform::ProgressLine line_;
 };
 
 }  // namespace
@@ -104,24 +102,18 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
   encode_options.settings.bitrate_bps = bitrate_bps;
   encode_options.calibration = calibration;
   encode::silenceCodecLogs();
-  bool line_open = false;
+  // Ended by its destructor, also when an exception leaves: the caller's message starts a line.
+  platform::ProgressLine line;
   try {
     encode::encodeDataset(input, out, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
       if (stop_requested && stop_requested()) throw EncodeInterrupted{};
       if (progress && (frame % 50 == 0 || frame + 1 == n)) {
-        fmt::print(stderr, "\rencoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
-        line_open = true;
+        line.update("encoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
       }
     });
   } catch (const EncodeInterrupted&) {
-    if (line_open) fmt::print(stderr, "\n");
     return false;
-  } catch (...) {
-    // The caller's error message starts on a line of its own, not after the progress.
-    if (line_open) fmt::print(stderr, "\n");
-    throw;
   }
-  if (line_open) fmt::print(stderr, "\n");
   return true;
 }
 
