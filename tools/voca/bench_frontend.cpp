@@ -17,6 +17,7 @@
 #include "platform/filesystem/temp_dir.h"
 #include "platform/machine/cpu_info.h"
 #include "platform/realtime/stop_signal.h"
+#include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
 #include "voca/frontend/patch_kernels_avx2.h"
@@ -85,6 +86,8 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
                                      : std::string(simd4::Native::kName));
   fmt::print("{:<16} {:>9} {:>9} {:>9} {:>9} {:>10} {:>10}  {}\n", "mode", "median ms", "p99 ms", "mean ms", "wall p50",
              "left pts", "right pts", fmt::format("target (<= {} ms)", kTargetMedianMs));
+  // The repeat counter is wiped before each table row (stdout) so only the rows stay on a terminal.
+  platform::ProgressLine progress;
   for (PriorMode mode : modes) {
     std::vector<double> cpu_ms, wall_ms;
     double left_points = 0.0, right_points = 0.0;
@@ -100,7 +103,10 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
       options.progress = false;
       options.pipeline.threads = 1;
       const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-      if (result.pipeline.error || result.stop_signal != 0) return reportRunEnd(result, PipelineCli{}, "bench");
+      if (result.pipeline.error || result.stop_signal != 0) {
+        progress.end();
+        return reportRunEnd(result, PipelineCli{}, "bench");
+      }
       if (r == 0 && mode == modes.front()) fmt::print("input: {}\n", result.description);
       // The first frame only detects.
       for (std::size_t k = 1; k < result.rows.size(); ++k) {
@@ -109,9 +115,9 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
         left_points += result.rows[k].left;
         right_points += result.rows[k].right;
       }
-      fmt::print(stderr, "\r{} repeat {}/{}   ", priorModeName(mode), r + 1, opts.repeat);
+      progress.update("{} repeat {}/{}", priorModeName(mode), r + 1, opts.repeat);
     }
-    fmt::print(stderr, "\r");
+    progress.clear();
     double mean = 0.0;
     for (double v : cpu_ms) mean += v;
     const double counted = static_cast<double>(std::max<std::size_t>(1, cpu_ms.size()));

@@ -17,6 +17,7 @@
 #include "platform/filesystem/temp_dir.h"
 #include "platform/realtime/stop_signal.h"
 #include "platform/realtime/thread_control.h"
+#include "platform/terminal/progress_line.h"
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
@@ -91,20 +92,22 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
     pipeline::VoRunResult last;
   };
   std::vector<Layout> layouts = {{"1 thread", 1, {}, 0.0, {}}, {"staged (one thread per stage)", 0, {}, 0.0, {}}};
+  platform::ProgressLine progress;
   for (int r = 0; r < opts.repeat; ++r) {
     for (Layout& layout : layouts) {
       resetPeakRss();
       layout.last = pipeline::runVisualOdometry(makeOptions(layout.threads));
       if (layout.last.pipeline.error || layout.last.stop_signal != 0) {
+        progress.end();
         return reportRunEnd(layout.last, PipelineCli{}, "bench");
       }
       layout.rss = std::max(layout.rss, peakRssMiB());
       const pipeline::RunReport& p = layout.last.pipeline;
       layout.fps.push_back(static_cast<double>(p.completed) / p.wall_s);
-      fmt::print(stderr, "\r{} run {}/{}: {:.1f} frames/s   ", layout.label, r + 1, opts.repeat, layout.fps.back());
+      progress.update("{} run {}/{}: {:.1f} frames/s", layout.label, r + 1, opts.repeat, layout.fps.back());
     }
   }
-  fmt::print(stderr, "\n");
+  progress.end();
   fmt::print("input: {}\n", layouts[0].last.description);
   fmt::print("offline throughput, decode included (median of {} runs, wall clock):\n", opts.repeat);
   for (const Layout& layout : layouts) {

@@ -12,6 +12,7 @@
 
 #include "drivers/decode/decoded_dataset.h"
 #include "drivers/encode/dataset_encoder.h"
+#include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 
@@ -69,28 +70,6 @@ void parseFps(const std::string& text, voca::encode::DatasetEncodeOptions& optio
 
 std::string megabytes(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
 
-// The progress line on stderr, rewritten in place. Anything else printed there (a warning, or the
-// error main() prints after an exception has unwound this) must start on a line of its own.
-class ProgressLine {
- public:
-  ProgressLine() = default;
-  ProgressLine(const ProgressLine&) = delete;
-  ProgressLine& operator=(const ProgressLine&) = delete;
-  ~ProgressLine() { end(); }
-
-  void show(const std::string& text) {
-    fmt::print(stderr, "\r{}   ", text);
-    open_ = true;
-  }
-  void end() {
-    if (open_) fmt::print(stderr, "\n");
-    open_ = false;
-  }
-
- private:
-  bool open_ = false;
-};
-
 int runEncode(const EncodeOptions& cli) {
   using namespace voca::encode;
   DatasetEncodeOptions options;
@@ -106,21 +85,17 @@ int runEncode(const EncodeOptions& cli) {
 
   const auto start = std::chrono::steady_clock::now();
   int last_percent = -1;
-  ProgressLine progress;
+  voca::platform::ProgressLine progress;
   const DatasetEncodeReport report = encodeDataset(
       cli.dataset, cli.out, options,
       [&](int camera, int pass, int passes, int frame, int frames) {
         const int percent = 100 * (frame + 1) / frames;
         if (percent == last_percent && frame + 1 != frames) return;
         last_percent = percent;
-        progress.show(
-            fmt::format("cam{} pass {}/{}: frame {}/{} ({}%)", camera, pass, passes, frame + 1, frames, percent));
+        progress.update("cam{} pass {}/{}: frame {}/{} ({}%)", camera, pass, passes, frame + 1, frames, percent);
         if (frame + 1 == frames) progress.end();
       },
-      [&](const std::string& warning) {
-        progress.end();
-        fmt::print(stderr, "warning: {}\n", warning);
-      });
+      [&](const std::string& warning) { progress.message("warning: " + warning); });
   fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
              report.num_frames);
   fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {}/{} fps, {})\n", cli.out, cli.codec,
@@ -156,7 +131,7 @@ int runEncode(const EncodeOptions& cli) {
     if (options.cameras.size() != 2) throw voca::InputError("--decoded-png needs both cameras (--cameras 0,1)");
     const voca::decode::DecodedDatasetReport decoded =
         voca::decode::writeDecodedEuroc(cli.out, cli.decoded_png, [&](std::int64_t done, std::int64_t total) {
-          if (done % 50 == 0 || done == total) progress.show(fmt::format("decoding to PNG: frame {}/{}", done, total));
+          if (done % 50 == 0 || done == total) progress.update("decoding to PNG: frame {}/{}", done, total);
           if (done == total) progress.end();
         });
     fmt::print("decoded    {} frames ({}x{}) as a EuRoC folder -> {}{}\n", decoded.frames, decoded.width,

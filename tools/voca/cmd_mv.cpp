@@ -18,6 +18,7 @@
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "pipeline/sinks/overlay_sink.h"
+#include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 #include "voca/motion/motion_field.h"
@@ -111,6 +112,7 @@ int runMv(const MvOptions& opts) {
   int written = 0;
   std::int64_t total_vectors = 0, total_outliers = 0;
   const std::int64_t expected = reader->expectedFrames();
+  voca::platform::ProgressLine progress;
   while (reader->next(frame)) {
     if (frame.frame_index < range.first) continue;  // decoded anyway: later P-frames refer to it
     if (frame.frame_index >= range.end) break;
@@ -124,12 +126,12 @@ int runMv(const MvOptions& opts) {
       voca::writePngRgb(fs::path(opts.out) / fmt::format("mv_{:06d}.png", frame.frame_index), canvas.view());
     }
     ++written;
-    fmt::print(stderr, "\rframe {}{} ({}): {} vectors, {} flagged    ", frame.frame_index,
-               expected > 0 ? fmt::format("/{}", expected) : std::string(),
-               voca::pictureTypeName(frame.motion.pictureType()), frame.motion.blocks().size(), outliers);
+    progress.update("frame {}{} ({}): {} vectors, {} flagged", frame.frame_index,
+                    expected > 0 ? fmt::format("/{}", expected) : std::string(),
+                    voca::pictureTypeName(frame.motion.pictureType()), frame.motion.blocks().size(), outliers);
   }
   if (video) video->finish();
-  fmt::print(stderr, "\n");
+  progress.end();
   if (written == 0) throw voca::InputError("--frames '" + opts.frames + "': no frame of the video is in this range");
   fmt::print("{}: wrote {} frame(s) to {} ({} vectors, {} flagged as likely outliers)\n", reader->path().string(),
              written, opts.format == "mp4" ? (fs::path(opts.out) / "mv.mp4").string() : opts.out, total_vectors,

@@ -8,6 +8,7 @@
 
 #include "pipeline/vo/camera_runner.h"
 #include "platform/realtime/stop_signal.h"
+#include "platform/terminal/progress_line.h"
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
 #include "tools/voca/encoder_cli.h"
@@ -34,14 +35,15 @@ int runRecord(const RecordCli& o) {
   options.fps = o.camera.fps;
   voca::platform::installStopHandlers();
   options.stop_requested = voca::platform::stopRequested;
-  options.progress = [](const voca::encode::RecordReport& r) {
+  voca::platform::ProgressLine progress;
+  options.progress = [&progress](const voca::encode::RecordReport& r) {
     if (r.frames % 30 != 0) return;
     const double seconds = static_cast<double>(r.last_t_ns - r.first_t_ns) * 1e-9;
-    fmt::print(stderr, "\rrecorded {} frames, {:.1f} s, {:.2f} MB   ", r.frames, seconds, megabytes(r.video_bytes));
+    progress.update("recorded {} frames, {:.1f} s, {:.2f} MB", r.frames, seconds, megabytes(r.video_bytes));
   };
   const voca::pipeline::CameraRecordResult result = voca::pipeline::recordFromCameras(options);
   const voca::encode::RecordReport& r = result.report;
-  fmt::print(stderr, "\n");
+  progress.end();
   for (const std::string& warning : result.warnings) fmt::print(stderr, "warning: {}\n", warning);
   if (!options.calibration) {
     fmt::print(stderr, "warning: no --calib: the folder has no calib.json; pass --calib to `voca run` later\n");
