@@ -63,7 +63,7 @@ TEST_CASE("on a terminal a message starts a line of its own and the progress goe
   ProgressLine line(out.file, ProgressLine::Mode::kTerminal);
   line.message("warning: before any progress");
   line.update("frame 20/60");
-  line.message("frame 25: lost (too few inliers)");
+  line.message("frame {}: {} ({})", 25, "lost", "too few inliers");
   line.update("frame 40/60");
   line.end();
   CHECK(contents(out.file) ==

@@ -46,8 +46,8 @@ class ProgressSink final : public FrameSink {
   void consume(const FrameSlot& slot) override {
     ++frames_;
     if (estimate_ && slot.pose.state != TrackingState::kTracking) {
-      line_.message(fmt::format("frame {}: {} ({})", slot.frame.frame_index, trackingStateName(slot.pose.state),
-                                failureReasonName(slot.pose.failure)));
+      line_.message("frame {}: {} ({})", slot.frame.frame_index, trackingStateName(slot.pose.state),
+                    failureReasonName(slot.pose.failure));
       hintAtFlowRetry(slot);
     }
     if (frames_ % 20 != 0 && frames_ != total_) return;
@@ -75,11 +75,10 @@ class ProgressSink final : public FrameSink {
       return;
     suggest_flow_retry_ = false;
     line_.message(
-        fmt::format("hint: the tracker lost {} of {} points from the previous frame: the image may move faster than "
-                    "the KLT pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the "
-                    "config's frontend section (configs/README.md), or track a video with motion vectors in a prior "
-                    "mode.",
-                    t.previous - t.kept, t.previous));
+        "hint: the tracker lost {} of {} points from the previous frame: the image may move faster than the KLT "
+        "pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the config's frontend "
+        "section (configs/README.md), or track a video with motion vectors in a prior mode.",
+        t.previous - t.kept, t.previous);
   }
 
   // "12/300", or "12" for live input of unknown length.

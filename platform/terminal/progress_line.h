@@ -50,6 +50,12 @@ class ProgressLine {
   // Prints line (without its '\n') on a line of its own: a warning or a per-frame note between
   // updates. The progress goes on with the next update, below it.
   void message(std::string_view line);
+  template <typename... Args>
+  void message(fmt::format_string<Args...> format, Args&&... args) {
+    fmt::memory_buffer line;  // on the stack up to 500 characters
+    fmt::format_to(std::back_inserter(line), format, std::forward<Args>(args)...);
+    message(std::string_view(line.data(), line.size()));
+  }
 
   // Finishes the line: on a terminal a '\n' after the text shown; in a log the latest text when the
   // throttle held it back. The next update starts a new line (and, in a log, is printed at once).

@@ -95,7 +95,7 @@ int runEncode(const EncodeOptions& cli) {
         progress.update("cam{} pass {}/{}: frame {}/{} ({}%)", camera, pass, passes, frame + 1, frames, percent);
         if (frame + 1 == frames) progress.end();
       },
-      [&](const std::string& warning) { progress.message("warning: " + warning); });
+      [&](const std::string& warning) { progress.message("warning: {}", warning); });
   fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
              report.num_frames);
   fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {}/{} fps, {})\n", cli.out, cli.codec,
