@@ -28,6 +28,11 @@ void requireSuccess(const voca::test::CommandOutput& result, const std::string& 
   REQUIRE(result.exit_code == 0);
 }
 
+// Whether text has this whole line.
+bool hasLine(const std::string& text, const std::string& line) {
+  return text.starts_with(line + "\n") || text.find("\n" + line + "\n") != std::string::npos;
+}
+
 std::size_t countLines(const fs::path& path) {
   std::ifstream in(path);
   std::size_t lines = 0;
@@ -68,8 +73,19 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   REQUIRE(first.height() == kHeight);
 
   // voca encode: the videos and the calibration keep the odd size.
-  requireSuccess(runVocaOutput("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass"),
-                 "voca encode");
+  const auto encoded =
+      runVocaOutput("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass");
+  requireSuccess(encoded, "voca encode");
+  {
+    // stderr is a file here, not a terminal: the progress is whole lines (each pass's first and last
+    // state), not '\r' rewrites glued into one endless line.
+    INFO("voca encode printed:\n" << encoded.text);
+    CHECK(encoded.text.find('\r') == std::string::npos);
+    for (const std::string camera : {"cam0", "cam1"}) {
+      CHECK(hasLine(encoded.text, camera + " pass 1/1: frame 1/30 (3%)"));
+      CHECK(hasLine(encoded.text, camera + " pass 1/1: frame 30/30 (100%)"));
+    }
+  }
   const voca::StereoRig encoded_rig = voca::loadCalibration(video / "calib.json");
   CHECK(encoded_rig.cameras[0].width == kWidth);
   CHECK(encoded_rig.cameras[0].height == kHeight);
@@ -97,7 +113,16 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
 
   // voca run with on-the-fly encoding (the KITTI 00-02 case of the issue), then voca eval.
   const fs::path trajectory = scratch / "traj.txt";
-  requireSuccess(runVocaOutput("run " + raw.string() + " --encode 500k --out " + trajectory.string()), "voca run");
+  const auto ran = runVocaOutput("run " + raw.string() + " --encode 500k --out " + trajectory.string());
+  requireSuccess(ran, "voca run");
+  {
+    // Both progress lines of the run, the encoding's and the VO's, as whole lines in a log.
+    INFO("voca run printed:\n" << ran.text);
+    CHECK(ran.text.find('\r') == std::string::npos);
+    CHECK(hasLine(ran.text, "encoding camera 0 pass 1/2: frame 1/30"));
+    CHECK(hasLine(ran.text, "encoding camera 1 pass 2/2: frame 30/30"));
+    CHECK(ran.text.find("\nframe 30/30: ") != std::string::npos);
+  }
   CHECK(countLines(trajectory) == 30);
   REQUIRE(dataset.ground_truth);
   const auto evaluated = runVocaOutput("eval --gt " + dataset.ground_truth->string() + " --est " + trajectory.string() +
