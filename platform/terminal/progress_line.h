@@ -16,8 +16,8 @@ namespace voca::platform {
 
 // Owns the line from the first update() to end(). Anything else printed on the same stream while
 // the line is open goes through message(), which puts it on a line of its own. Not thread-safe:
-// one thread updates it. Writes with fwrite and never throws (end() runs in the destructor, also
-// while an exception unwinds).
+// one thread updates it. end() writes with fwrite and never throws: it runs in the destructor, also
+// while an exception unwinds, so an error printed after that starts a line of its own.
 class ProgressLine {
  public:
   enum class Mode {
@@ -25,7 +25,7 @@ class ProgressLine {
     kTerminal,  // '\r' rewrites one line
     kLog,       // whole lines ending in '\n', throttled
   };
-  // A log gets an update at most this often: a 10-minute run leaves about a hundred lines.
+  // A log gets an update at most this often: a 10-minute run leaves about 120 progress lines.
   static constexpr std::int64_t kLogIntervalNs = 5'000'000'000;
 
   // now_ns: the clock the log throttle reads (default: steady clock); injectable for tests.
@@ -77,7 +77,7 @@ class ProgressLine {
   std::function<std::int64_t()> now_ns_;
   fmt::memory_buffer text_;      // the latest update
   fmt::memory_buffer printed_;   // log: the last update printed
-  bool open_ = false;            // an update since the last end()
+  bool open_ = false;            // terminal: text on screen, cursor after it; log: an update since end()
   std::size_t shown_ = 0;        // terminal: characters of the text on screen
   std::int64_t printed_ns_ = 0;  // log: when printed_ was printed
 };
