@@ -325,7 +325,7 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
         // A step the quadratic model expects to lower the cost by less than the convergence bound
         // most likely ends the loop (or leads to the outlier filter, after which everything is
         // linearised anew): it is judged by a cost pass, not by a linearisation that would go
-        // unused. -b.dx is twice the Gauss-Newton model's decrease. Only the work differs: both
+        // unused. -b.dx is about twice the model's decrease (exactly, undamped). Only the work differs: both
         // passes give the same cost to the bit, so every decision and result is the same.
         const double model_decrease = -0.5 * b_reduced_.dot(dx_);
         const bool linearize_next =
