@@ -203,7 +203,14 @@ TEST_CASE("patch kernels: the AVX2 warped sampling equals the portable kernel bi
       for (int r = 0; r < 3; ++r) CHECK(sameBits(a_dots[r], p_dots[r]));
       for (int i = 0; i < n; ++i)
         CHECK(sameBits(a_out[static_cast<std::size_t>(i)], p_out[static_cast<std::size_t>(i)]));
-      // The two uses in the tracker: samples only, and dot products only.
+      // Every combination of the outputs (each its own loop): the tracker's two uses, samples only
+      // (patchResidual) and dot products only (alignPatch), and the sum alone.
+      std::array<float, PatchPattern::kMaxSize> samples_only{};
+      CHECK(sameBits(kernels::sampleWarpedAvx2(view.data, view.stride, *pattern, n, c, s, tx, ty, samples_only.data(),
+                                               nullptr, nullptr),
+                     p_sum));
+      for (int i = 0; i < n; ++i)
+        CHECK(sameBits(samples_only[static_cast<std::size_t>(i)], p_out[static_cast<std::size_t>(i)]));
       CHECK(sameBits(
           kernels::sampleWarpedAvx2(view.data, view.stride, *pattern, n, c, s, tx, ty, nullptr, step, a_dots), p_sum));
       for (int r = 0; r < 3; ++r) CHECK(sameBits(a_dots[r], p_dots[r]));

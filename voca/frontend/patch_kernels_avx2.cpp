@@ -138,29 +138,53 @@ namespace {
   return V::sum(total);
 }
 
-// The operations of sampleWarped<Sse2> (warpPoints, cellOffsets, bilinear) on eight lanes, in the same order.
-[[gnu::target("avx2")]] float sampleWarpedAvx2(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern,
-                                               int n, float c, float s, float tx, float ty, float* out,
-                                               const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
+namespace {
+
+// sampleWarpedAvx2 for one combination of its optional outputs. The callers pass either `out` (a
+// residual) or `step` (an alignment step): a loop without the other one's branches and pointers
+// keeps its sums in registers. The same operations in the same order, so the same bits.
+template <bool kOut, bool kStep>
+[[gnu::target("avx2"), gnu::always_inline]] inline float sampleWarpedAvx2For(
+    const float* data, std::ptrdiff_t stride, const PatchPattern& pattern, int n, float c, float s, float tx, float ty,
+    float* out, const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
   using V = simd4::Sse2;
   const __m256 vc = _mm256_set1_ps(c), vs = _mm256_set1_ps(s), vtx = _mm256_set1_ps(tx), vty = _mm256_set1_ps(ty);
-  WarpedSums<V> sums;
+  __m128 total = _mm_setzero_ps(), dot0 = total, dot1 = total, dot2 = total;
   int i = 0;
   for (; i + 8 <= n; i += 8) {
     __m256 x, y;
     warpPoints8(pattern, i, vc, vs, vtx, vty, x, y);
     const __m256 v = bilinear8(data, stride, x, y);
-    if (out != nullptr) _mm256_storeu_ps(out + i, v);
-    if (step != nullptr) {
-      sums.dot0 = addHalves(sums.dot0, _mm256_mul_ps(_mm256_loadu_ps(step[0].data() + i), v));
-      sums.dot1 = addHalves(sums.dot1, _mm256_mul_ps(_mm256_loadu_ps(step[1].data() + i), v));
-      sums.dot2 = addHalves(sums.dot2, _mm256_mul_ps(_mm256_loadu_ps(step[2].data() + i), v));
+    if constexpr (kOut) _mm256_storeu_ps(out + i, v);
+    if constexpr (kStep) {
+      dot0 = addHalves(dot0, _mm256_mul_ps(_mm256_loadu_ps(step[0].data() + i), v));
+      dot1 = addHalves(dot1, _mm256_mul_ps(_mm256_loadu_ps(step[1].data() + i), v));
+      dot2 = addHalves(dot2, _mm256_mul_ps(_mm256_loadu_ps(step[2].data() + i), v));
     }
-    sums.total = addHalves(sums.total, v);
+    total = addHalves(total, v);
   }
+  WarpedSums<V> sums;
+  sums.total = total;
+  sums.dot0 = dot0;
+  sums.dot1 = dot1;
+  sums.dot2 = dot2;
   // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel's own loop.
-  accumulateWarped<V>(data, stride, pattern, i, n, c, s, tx, ty, out, step, sums);
-  return finishWarped<V>(sums, step, dots);
+  accumulateWarped<V>(data, stride, pattern, i, n, c, s, tx, ty, kOut ? out : nullptr, kStep ? step : nullptr, sums);
+  return finishWarped<V>(sums, kStep ? step : nullptr, dots);
+}
+
+}  // namespace
+
+// The operations of sampleWarped<Sse2> (warpPoints, cellOffsets, bilinear) on eight lanes, in the same order.
+[[gnu::target("avx2")]] float sampleWarpedAvx2(const float* data, std::ptrdiff_t stride, const PatchPattern& pattern,
+                                               int n, float c, float s, float tx, float ty, float* out,
+                                               const std::array<float, PatchPattern::kMaxSize>* step, float* dots) {
+  if (step != nullptr) {
+    if (out != nullptr) return sampleWarpedAvx2For<true, true>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
+    return sampleWarpedAvx2For<false, true>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
+  }
+  if (out != nullptr) return sampleWarpedAvx2For<true, false>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
+  return sampleWarpedAvx2For<false, false>(data, stride, pattern, n, c, s, tx, ty, out, step, dots);
 }
 
 // The operations of sampleWarpedMasked<Sse2> (warpPoints, sampleable, bilinear at the substitute
