@@ -163,11 +163,7 @@ template <bool kOut, bool kStep>
     }
     total = addHalves(total, v);
   }
-  WarpedSums<V> sums;
-  sums.total = total;
-  sums.dot0 = dot0;
-  sums.dot1 = dot1;
-  sums.dot2 = dot2;
+  WarpedSums<V> sums{total, dot0, dot1, dot2};
   // A last group of four (52 = 6 * 8 + 4) by the four-lane kernel's own loop.
   accumulateWarped<V>(data, stride, pattern, i, n, c, s, tx, ty, kOut ? out : nullptr, kStep ? step : nullptr, sums);
   return finishWarped<V>(sums, kStep ? step : nullptr, dots);
