@@ -78,24 +78,34 @@ TEST_CASE("pyramid: binomial smoothing keeps linear ramps, so level l samples le
 TEST_CASE("pyramid: presmooth applies [1 2 1]/4 to level 0: ramps and constants kept, Nyquist detail removed") {
   const int w = 64, h = 48;
   ImagePyramid smooth(w, h, 3, true), plain(w, h, 3, false);
+  // The smoothing is chosen per image: a pyramid that may smooth builds plain images unchanged.
+  ImagePyramid may_smooth(w, h, 3, true);
   // A linear ramp passes a symmetric kernel unchanged away from the border (the replicated border
   // bends it there); 8-bit inputs at integer steps are exact.
   const GrayImage ramp = renderArbitrary(w, h, [](double x, double y) { return 20.0 + 2.0 * x + 1.0 * y; });
-  smooth.build(ramp.view());
+  smooth.build(ramp.view(), true);
   plain.build(ramp.view());
   for (int y = 1; y < h - 1; ++y)
     for (int x = 1; x < w - 1; ++x) CHECK(smooth.level(0)(x, y) == plain.level(0)(x, y));
   // Constant: unchanged everywhere, borders included.
   const GrayImage flat(w, h, 90);
-  smooth.build(flat.view());
+  smooth.build(flat.view(), true);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) CHECK(smooth.level(0)(x, y) == 90.f);
   // A one-pixel checkerboard (the Nyquist frequency) has zero response: the mean remains.
   const GrayImage checker = renderArbitrary(
       w, h, [](double x, double y) { return (static_cast<int>(x) + static_cast<int>(y)) % 2 == 0 ? 100.0 : 200.0; });
-  smooth.build(checker.view());
+  smooth.build(checker.view(), true);
   for (int y = 1; y < h - 1; ++y)
     for (int x = 1; x < w - 1; ++x) CHECK(smooth.level(0)(x, y) == 150.f);
+  plain.build(checker.view());
+  may_smooth.build(checker.view(), false);
+  for (int l = 0; l < 3; ++l) {
+    for (int y = 0; y < plain.level(l).height; ++y)
+      for (int x = 0; x < plain.level(l).width; ++x) REQUIRE(may_smooth.level(l)(x, y) == plain.level(l)(x, y));
+  }
+  // Smoothing needs the scratch rows reserved at construction.
+  CHECK_THROWS_AS(plain.build(checker.view(), true), std::logic_error);
   // The other levels are built from the smoothed level 0, with the same sizes.
   CHECK(smooth.level(2).width == plain.level(2).width);
   CHECK(smooth.level(2)(5, 5) == doctest::Approx(150.f));

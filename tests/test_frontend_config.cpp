@@ -50,7 +50,7 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(e.prior_mode == PriorMode::kMvParallelOf);
   CHECK(e.consensus_tolerance_px2 == 0.05);
   CHECK(e.bridge_iframes);
-  CHECK_FALSE(e.presmooth);               // not in the paper: off in its configurations
+  CHECK(e.presmooth == Presmooth::kOff);  // not in the paper: off in its configurations
   CHECK(e.prior_agree_radius_px == 1.0);  // ours (configs/README.md), a speed-up in every shipped config
   CHECK(e.thin_when_full_px == 8.0);      // ours (configs/README.md): crowded tracks give way when full
   const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
@@ -70,7 +70,14 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK_FALSE(e.detection_nonoverlap);
   // Missing keys and sections take the defaults, which are the EuRoC values.
   const VocaConfig empty = parseConfig(nlohmann::json::object(), "empty");
-  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"presmooth": true}})"), "x").frontend.presmooth);
+  const auto presmoothOf = [](const char* text) {
+    return parseConfig(nlohmann::json::parse(text), "x").frontend.presmooth;
+  };
+  CHECK(presmoothOf(R"({"frontend": {"presmooth": "raw"}})") == Presmooth::kRawInput);
+  CHECK(presmoothOf(R"({"frontend": {"presmooth": "always"}})") == Presmooth::kAlways);
+  CHECK(presmoothOf(R"({"frontend": {"presmooth": "off"}})") == Presmooth::kOff);
+  CHECK(presmoothOf(R"({"frontend": {"presmooth": true}})") == Presmooth::kAlways);  // the key's older form
+  CHECK(presmoothOf(R"({"frontend": {"presmooth": false}})") == Presmooth::kOff);
   CHECK(empty.frontend.grid_size_px == e.grid_size_px);
   CHECK(empty.frontend.prior_mode == e.prior_mode);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"prior_mode": "none", "pattern": 24}})"), "x")
@@ -118,7 +125,9 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.matching_guess"));
 
   message = errorFor(R"({"frontend": {"presmooth": "yes"}})");
-  CHECK(contains(message, "frontend.presmooth: expected true or false"));
+  CHECK(contains(message, R"(frontend.presmooth: expected "off", "raw" or "always", got "yes")"));
+  message = errorFor(R"({"frontend": {"presmooth": 1}})");
+  CHECK(contains(message, R"(frontend.presmooth: expected "off", "raw" or "always", got 1)"));
 
   message = errorFor(R"({"frontend": {"prior_min_block_px": 65}})");
   CHECK(contains(message, "frontend.prior_min_block_px"));

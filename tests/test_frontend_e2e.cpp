@@ -38,6 +38,7 @@ struct Frame {
   MotionField motion_left, motion_right;
   PictureType type = PictureType::kUnknown;
   bool has_motion = false;
+  bool decoded = false;  // came out of a video decoder (presmooth "raw" leaves it alone)
   std::int64_t t_ns = 0;
 };
 
@@ -150,6 +151,7 @@ RunResult runFrontend(const FrontendConfig& config, const StereoRig& rig, const 
       in.motion = {f.motion_left, f.motion_right};
       in.has_motion = true;
     }
+    in.decoded = f.decoded;
     in.t_ns = f.t_ns;
     FrontendStats stats;
     frontend.track(in, out, stats);
@@ -287,7 +289,7 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
 
   // presmooth ([1 2 1]/4 on level 0) removes the detail the pattern's 2 px grid aliases: measured
   // median 0.060 / p90 0.166 px, about half. Bounds: measured plus ~30 %, and below the plain run.
-  config.presmooth = true;
+  config.presmooth = Presmooth::kAlways;
   const std::vector<double> smoothed = trackErrors(world, runFrontend(config, world.rig, frames));
   MESSAGE("synthetic gentle, presmooth: " << smoothed.size() << " observations, median " << quantile(smoothed, 0.5)
                                           << " px, p90 " << quantile(smoothed, 0.9) << " px");
@@ -295,6 +297,14 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
   CHECK(quantile(smoothed, 0.5) < 0.08);
   CHECK(quantile(smoothed, 0.9) < 0.22);
   CHECK(quantile(smoothed, 0.5) < 0.7 * quantile(errors, 0.5));
+
+  // presmooth "raw" smooths these frames, which are raw, exactly as "always" does; the same images
+  // marked as decoded are tracked exactly as without smoothing.
+  config.presmooth = Presmooth::kRawInput;
+  CHECK(trackErrors(world, runFrontend(config, world.rig, frames)) == smoothed);
+  std::vector<Frame> marked_decoded = frames;
+  for (Frame& f : marked_decoded) f.decoded = true;
+  CHECK(trackErrors(world, runFrontend(config, world.rig, marked_decoded)) == errors);
 }
 
 TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optimum; pattern and noise set the floor") {
@@ -311,13 +321,13 @@ TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optim
       CAPTURE(presmooth);
       FrontendConfig config;
       config.prior_mode = PriorMode::kNone;
-      config.presmooth = presmooth;
+      config.presmooth = presmooth ? Presmooth::kAlways : Presmooth::kOff;
       const RunResult run = runFrontend(config, world.rig, frames);
       std::array<ImagePyramid, 2> level0;
       for (int k = 0; k < 2; ++k) {
         const GrayImage& image = frames[static_cast<std::size_t>(k)].left;
         level0[static_cast<std::size_t>(k)] = ImagePyramid(image.width(), image.height(), 1, presmooth);
-        level0[static_cast<std::size_t>(k)].build(image.view());
+        level0[static_cast<std::size_t>(k)].build(image.view(), presmooth);
       }
       std::map<std::uint64_t, Eigen::Vector2f> start;
       for (const KeypointObservation& o : run.left[0]) start[o.track_id] = o.px;

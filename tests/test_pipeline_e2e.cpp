@@ -248,6 +248,31 @@ TEST_CASE("pipeline e2e: prior_max_qp reaches the decoder: the quantisers are ex
   CHECK(off.frontend.distrusted == 0);
 }
 
+TEST_CASE("pipeline e2e: presmooth \"raw\" smooths the raw dataset's frames and leaves decoded ones alone") {
+  // The source stage hands raw images on, the decode stage decoded ones; the frontend smooths by
+  // what each frame is, so "raw" must write "always"'s trajectory on the raw dataset and "off"'s on
+  // its video, byte for byte, while "always" and "off" differ on both.
+  test::ScratchDir dir("pipeline-presmooth");
+  for (const char* value : {"off", "raw", "always"}) {
+    std::ofstream(dir / (std::string(value) + ".json")) << R"({"frontend": {"presmooth": ")" << value << R"("}})";
+  }
+  const auto trajectoryOf = [&](const fs::path& input, const std::string& value) {
+    const fs::path out = dir / (input.filename().string() + "-" + value + ".txt");
+    pipeline::VoRunOptions options = quietRun(input, out, 1);
+    options.config = dir / (value + ".json");
+    const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+    REQUIRE_FALSE(result.pipeline.error);
+    return fileText(out);
+  };
+  for (const fs::path& input : {rendered().raw, rendered().video}) {
+    CAPTURE(input);
+    const std::string off = trajectoryOf(input, "off"), always = trajectoryOf(input, "always");
+    REQUIRE_FALSE(off.empty());
+    CHECK(off != always);
+    CHECK(trajectoryOf(input, "raw") == (input == rendered().raw ? always : off));
+  }
+}
+
 TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --strict stops naming the frame") {
   test::ScratchDir dir("pipeline-damaged");
   const fs::path video = dir / "video";

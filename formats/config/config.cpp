@@ -64,7 +64,16 @@ const FrontendField kFrontendFields[] = {
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
-    {"presmooth", &FrontendConfig::presmooth},
+    // true and false are the key's older form (true smoothed every input).
+    {"presmooth", ConfigReader<FrontendConfig>{[](FrontendConfig& c, const ConfigValue& value, const std::string& at) {
+       const nlohmann::json& v = value.json();
+       std::optional<Presmooth> presmooth;
+       if (v.is_boolean()) presmooth = v.get<bool>() ? Presmooth::kAlways : Presmooth::kOff;
+       if (v.is_string()) presmooth = parsePresmooth(v.get<std::string>());
+       if (!presmooth)
+         throw InputError(fmt::format("{}: expected \"off\", \"raw\" or \"always\", got {}", at, v.dump()));
+       c.presmooth = *presmooth;
+     }}},
 };
 
 // The file's top level: one section per component.

@@ -106,6 +106,7 @@ struct DecodeStage::Impl {
         out.release(*p.slot, ReleaseReason::kNotTracked);
       } else if (!p.damaged) {
         p.slot->frame.has_motion = options.decoder.export_motion;
+        p.slot->frame.decoded = true;
         out.forward(*p.slot);
       } else {
         out.release(*p.slot, ReleaseReason::kDamaged);

@@ -56,6 +56,7 @@ Produced SourceStageAdapter::produce(FrameSlot& slot) {
         frame.motion[i].finalize();
       }
       frame.has_motion = false;
+      frame.decoded = false;
     }
   } else {
     if (!source_.next(slot.encoded)) return Produced::kEnd;

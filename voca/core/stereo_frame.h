@@ -23,6 +23,7 @@ struct DecodedStereoFrame {
   // Raw images have kUnknown pictures and no vectors.
   std::array<MotionField, kNumCameras> motion;
   bool has_motion = false;  // decoded from video with motion export: the prior modes are active
+  bool decoded = false;     // the images came out of a video decoder (the codec has smoothed them)
   // Frames of the source between the previous frame the frontend saw and this one that never
   // reached it (dropped by the live policy, or damaged and skipped). The motion vectors of this
   // frame point into a picture the tracker has not seen when this is non-zero.

@@ -78,7 +78,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cameras_model_[static_cast<std::size_t>(c)] = rig.cameras[static_cast<std::size_t>(c)].camera;
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     for (ImagePyramid& pyramid : cam.pyramids)
-      pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth);
+      pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth != Presmooth::kOff);
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
@@ -565,10 +565,13 @@ void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out
   stats.clear();
   stats.frame_index = input.frame_index;
   if (std::isfinite(input.depth_hint_m) && input.depth_hint_m > 0.0) average_depth_m_ = input.depth_hint_m;
+  const bool presmooth =
+      config_.presmooth == Presmooth::kAlways || (config_.presmooth == Presmooth::kRawInput && !input.decoded);
   for (int c = 0; c < 2; ++c) {
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     cam.current = 1 - cam.current;
-    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)].view());
+    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)].view(),
+                                                              presmooth);
   }
   for (int c = 0; c < 2; ++c) {
     if (have_previous_) {

@@ -45,6 +45,25 @@ PriorMode requirePriorMode(std::string_view name, std::string_view what) {
   return *mode;
 }
 
+std::string_view presmoothName(Presmooth presmooth) {
+  switch (presmooth) {
+    case Presmooth::kOff:
+      return "off";
+    case Presmooth::kRawInput:
+      return "raw";
+    case Presmooth::kAlways:
+      return "always";
+  }
+  return "off";
+}
+
+std::optional<Presmooth> parsePresmooth(std::string_view name) {
+  for (const Presmooth p : {Presmooth::kOff, Presmooth::kRawInput, Presmooth::kAlways}) {
+    if (name == presmoothName(p)) return p;
+  }
+  return std::nullopt;
+}
+
 std::string_view stereoGuessName(StereoGuess guess) {
   return guess == StereoGuess::kFixedDepth ? "reproj_fixed_depth" : "reproj_avg_depth";
 }

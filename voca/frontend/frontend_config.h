@@ -18,6 +18,13 @@ enum class PriorMode : std::uint8_t {
   kMvParallelOf,  // both; kept when only one succeeds or both agree within consensus_tolerance
 };
 
+// Which input is smoothed by [1 2 1]/4 before tracking (FrontendConfig::presmooth).
+enum class Presmooth : std::uint8_t {
+  kOff,
+  kRawInput,  // images that never passed through a video codec (datasets, cameras without encoding)
+  kAlways,
+};
+
 // Where a new left point is first looked for in the right image.
 enum class StereoGuess : std::uint8_t {
   kFixedDepth,    // reprojection at matching_default_depth_m
@@ -33,6 +40,9 @@ std::optional<PriorMode> parsePriorMode(std::string_view name);
 std::string priorModeList();
 // parsePriorMode, or InputError "<what>: unknown mode "x" (expected none, mv, ...)".
 PriorMode requirePriorMode(std::string_view name, std::string_view what);
+std::string_view presmoothName(Presmooth presmooth);
+// "off", "raw" or "always"; JSON true and false are read as "always" and "off" by the config reader.
+std::optional<Presmooth> parsePresmooth(std::string_view name);
 std::string_view stereoGuessName(StereoGuess guess);
 std::optional<StereoGuess> parseStereoGuess(std::string_view name);
 
@@ -125,8 +135,10 @@ struct FrontendConfig {
   // not retried (that track would start where the plain one did). Not in Basalt or the paper.
   bool retry_previous_flow = false;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
-  // patterns' 2 px sample grid has on sharp images (see ImagePyramid). Not in Basalt or the paper.
-  bool presmooth = false;
+  // patterns' 2 px sample grid has on sharp images and against sensor noise (see ImagePyramid).
+  // kRawInput leaves decoded frames alone: the codec has smoothed them already, and smoothing them
+  // again costs the prior modes accuracy (configs/README.md). Not in Basalt or the paper.
+  Presmooth presmooth = Presmooth::kOff;
 };
 
 }  // namespace voca

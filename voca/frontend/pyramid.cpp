@@ -11,8 +11,8 @@ namespace {
 int halfSize(int n) { return (n + 1) / 2; }
 }  // namespace
 
-ImagePyramid::ImagePyramid(int max_width, int max_height, int num_levels, bool presmooth)
-    : num_levels_(num_levels), presmooth_(presmooth), max_width_(max_width), max_height_(max_height) {
+ImagePyramid::ImagePyramid(int max_width, int max_height, int num_levels, bool can_presmooth)
+    : num_levels_(num_levels), can_presmooth_(can_presmooth), max_width_(max_width), max_height_(max_height) {
   if (num_levels < 1 || num_levels > kMaxLevels) throw std::invalid_argument("ImagePyramid: levels out of range");
   int w = max_width, h = max_height;
   for (int l = 0; l < num_levels; ++l) {
@@ -20,16 +20,17 @@ ImagePyramid::ImagePyramid(int max_width, int max_height, int num_levels, bool p
     w = halfSize(w);
     h = halfSize(h);
   }
-  scratch_.resize(presmooth ? max_width : halfSize(max_width), max_height);
+  scratch_.resize(can_presmooth ? max_width : halfSize(max_width), max_height);
 }
 
-void ImagePyramid::build(GrayView image) {
+void ImagePyramid::build(GrayView image, bool presmooth) {
   if (image.width > max_width_ || image.height > max_height_) {
     throw std::length_error("ImagePyramid: image larger than the capacity");
   }
+  if (presmooth && !can_presmooth_) throw std::logic_error("ImagePyramid: built without presmooth capacity");
   FloatImage& base = levels_[0];
   base.resize(image.width, image.height);
-  if (presmooth_) {
+  if (presmooth) {
     convertSmoothed(image);
   } else {
     for (int y = 0; y < image.height; ++y) {
