@@ -557,10 +557,12 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
     std::vector<Eigen::Vector2f> kept;
   };
   // Frames 0-7, frame k moving the image by step(k).
-  const auto run = [&](PriorMode mode, bool retry, const std::function<Eigen::Vector2d(int)>& step) {
+  // decoded: the frames are marked as decoded from video (a scope of "raw" then leaves them alone).
+  const auto run = [&](PriorMode mode, bool retry, const std::function<Eigen::Vector2d(int)>& step,
+                       InputScope scope = InputScope::kAlways, bool decoded = false) {
     FrontendConfig config;
     config.prior_mode = mode;
-    config.retry_previous_flow = retry;
+    config.retry_previous_flow = retry ? scope : InputScope::kOff;
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame out;
     FrontendStats stats;
@@ -575,6 +577,7 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
       in.images = {left, right};
       in.t_ns = k * 50'000'000LL;
       in.frame_index = k;
+      in.decoded = decoded;
       frontend.track(in, out, stats);
       Frame& f = frames[static_cast<std::size_t>(k)];
       f.stats = stats.temporal[0];
@@ -601,6 +604,16 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
     CHECK(retried[k].stats.flow_retried >= retried[k].correct * 3 / 4);
     CHECK(retried[k].stats.kept - retried[k].correct <= 2);
   }
+  // Scope "raw": these raw frames are retried exactly as with "always"; marked decoded, not at all.
+  const auto same = [](const std::vector<Frame>& x, const std::vector<Frame>& y) {
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (x[k].kept != y[k].kept || x[k].stats.flow_retried != y[k].stats.flow_retried) return false;
+    }
+    return true;
+  };
+  CHECK(same(run(PriorMode::kNone, true, speeding_up, InputScope::kRawInput), retried));
+  CHECK(same(run(PriorMode::kNone, true, speeding_up, InputScope::kRawInput, true), plain));
+  CHECK_FALSE(same(retried, plain));
   // A prior mode on a stream without vectors (raw images): the retry is its last resort too.
   const auto prior_mode = run(PriorMode::kMvParallelOf, true, speeding_up);
   CHECK(prior_mode[7].correct >= prior_mode[7].visible * 8 / 10);

@@ -45,10 +45,10 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     const PriorMode mode = modes[static_cast<std::size_t>(run)];
     FrontendConfig config;
     config.prior_mode = mode;
-    config.presmooth = run == 5 ? Presmooth::kAlways : Presmooth::kOff;
+    config.presmooth = run == 5 ? InputScope::kAlways : InputScope::kOff;
     config.detection_nonoverlap = run == 5;
     config.thin_when_full_px = run == 6 ? 50.0 : 0.0;
-    config.retry_previous_flow = run == 7;
+    config.retry_previous_flow = run == 7 ? InputScope::kAlways : InputScope::kOff;
     KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = run == 6 ? 30 : 300});
     TrackedStereoFrame out;
     FrontendStats stats;

@@ -289,7 +289,7 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
 
   // presmooth ([1 2 1]/4 on level 0) removes the detail the pattern's 2 px grid aliases: measured
   // median 0.060 / p90 0.166 px, about half. Bounds: measured plus ~30 %, and below the plain run.
-  config.presmooth = Presmooth::kAlways;
+  config.presmooth = InputScope::kAlways;
   const std::vector<double> smoothed = trackErrors(world, runFrontend(config, world.rig, frames));
   MESSAGE("synthetic gentle, presmooth: " << smoothed.size() << " observations, median " << quantile(smoothed, 0.5)
                                           << " px, p90 " << quantile(smoothed, 0.9) << " px");
@@ -300,7 +300,7 @@ TEST_CASE("e2e frontend: synthetic gentle motion, raw images, errors against ray
 
   // presmooth "raw" smooths these frames, which are raw, exactly as "always" does; the same images
   // marked as decoded are tracked exactly as without smoothing.
-  config.presmooth = Presmooth::kRawInput;
+  config.presmooth = InputScope::kRawInput;
   CHECK(trackErrors(world, runFrontend(config, world.rig, frames)) == smoothed);
   std::vector<Frame> marked_decoded = frames;
   for (Frame& f : marked_decoded) f.decoded = true;
@@ -321,7 +321,7 @@ TEST_CASE("e2e frontend: synthetic, one frame step: KLT reaches its cost's optim
       CAPTURE(presmooth);
       FrontendConfig config;
       config.prior_mode = PriorMode::kNone;
-      config.presmooth = presmooth ? Presmooth::kAlways : Presmooth::kOff;
+      config.presmooth = presmooth ? InputScope::kAlways : InputScope::kOff;
       const RunResult run = runFrontend(config, world.rig, frames);
       std::array<ImagePyramid, 2> level0;
       for (int k = 0; k < 2; ++k) {

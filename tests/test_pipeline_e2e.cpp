@@ -371,11 +371,11 @@ TEST_CASE("pipeline e2e: a failure where the tracker lost most points hints at r
   REQUIRE(plain.text.find("reset (too few inliers)") != std::string::npos);
   const std::size_t hint = plain.text.find("hint: the tracker lost ");
   CHECK(hint != std::string::npos);
-  CHECK(plain.text.find("\"retry_previous_flow\": true", hint) != std::string::npos);
+  CHECK(plain.text.find("\"retry_previous_flow\": \"always\"", hint) != std::string::npos);
   CHECK(plain.text.find("hint: ", hint + 1) == std::string::npos);
-  // With the key set there is nothing to suggest.
+  // With the key acting on this input ("raw": these frames are raw) there is nothing to suggest.
   const fs::path config = dir / "retry.json";
-  std::ofstream(config) << R"({"frontend": {"retry_previous_flow": true}})";
+  std::ofstream(config) << R"({"frontend": {"retry_previous_flow": "raw"}})";
   const test::CommandOutput retried = test::runVocaOutput(run + " --config " + config.string());
   INFO(retried.text);
   CHECK(retried.exit_code == 0);

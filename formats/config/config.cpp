@@ -18,6 +18,18 @@ using json = nlohmann::json;
 using FrontendField = ConfigField<FrontendConfig>;
 using FrontendChoice = ConfigChoice<FrontendConfig>;
 
+// "off", "raw" or "always" (InputScope). true and false are these keys' older form, when they
+// applied to every input or none.
+template <InputScope FrontendConfig::*kMember>
+void readInputScope(FrontendConfig& c, const ConfigValue& value, const std::string& at) {
+  const json& v = value.json();
+  std::optional<InputScope> scope;
+  if (v.is_boolean()) scope = v.get<bool>() ? InputScope::kAlways : InputScope::kOff;
+  if (v.is_string()) scope = parseInputScope(v.get<std::string>());
+  if (!scope) throw InputError(fmt::format("{}: expected \"off\", \"raw\" or \"always\", got {}", at, v.dump()));
+  c.*kMember = *scope;
+}
+
 // The frontend's ranges are checked by validateFrontendConfig (open bounds, 24-or-52, relations), so
 // its fields carry none.
 const FrontendField kFrontendFields[] = {
@@ -60,20 +72,11 @@ const FrontendField kFrontendFields[] = {
     {"backward_pyramid_levels", &FrontendConfig::backward_pyramid_levels},
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
     {"thin_when_full_px", &FrontendConfig::thin_when_full_px},
-    {"retry_previous_flow", &FrontendConfig::retry_previous_flow},
+    {"retry_previous_flow", ConfigReader<FrontendConfig>{&readInputScope<&FrontendConfig::retry_previous_flow>}},
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
-    // true and false are the key's older form (true smoothed every input).
-    {"presmooth", ConfigReader<FrontendConfig>{[](FrontendConfig& c, const ConfigValue& value, const std::string& at) {
-       const nlohmann::json& v = value.json();
-       std::optional<Presmooth> presmooth;
-       if (v.is_boolean()) presmooth = v.get<bool>() ? Presmooth::kAlways : Presmooth::kOff;
-       if (v.is_string()) presmooth = parsePresmooth(v.get<std::string>());
-       if (!presmooth)
-         throw InputError(fmt::format("{}: expected \"off\", \"raw\" or \"always\", got {}", at, v.dump()));
-       c.presmooth = *presmooth;
-     }}},
+    {"presmooth", ConfigReader<FrontendConfig>{&readInputScope<&FrontendConfig::presmooth>}},
 };
 
 // The file's top level: one section per component.

@@ -35,7 +35,7 @@ struct EncodeInterrupted {};
 // Progress on stderr: a line every few frames, and one per frame that was not tracked.
 class ProgressSink final : public FrameSink {
  public:
-  // suggest_flow_retry: the frontend runs without retry_previous_flow, so a failure where the
+  // suggest_flow_retry: retry_previous_flow does not act on this input, so a failure where the
   // temporal step lost most points gets a hint at that key, once.
   ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry)
       : total_(total),
@@ -76,7 +76,8 @@ class ProgressSink final : public FrameSink {
     suggest_flow_retry_ = false;
     line_.message(
         "hint: the tracker lost {} of {} points from the previous frame: the image may move faster than the KLT "
-        "pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": true in the config's frontend "
+        "pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": \"always\" in the config's "
+        "frontend "
         "section (configs/README.md), or track a video with motion vectors in a prior mode.",
         t.previous - t.kept, t.previous);
   }
@@ -251,6 +252,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     }
   }
   result.has_motion = info.kind == SourceKind::kEncoded;
+  const bool decoded = info.kind == SourceKind::kEncoded;  // the decode stage marks every frame it hands on
 
   // The stages, in data-flow order; positions count the source as 0.
   SourceStageOptions source_options;
@@ -313,8 +315,9 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   }
   std::unique_ptr<ProgressSink> progress;
   if (options.progress) {
-    progress = std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position,
-                                              backend_position, !result.config.frontend.retry_previous_flow);
+    progress =
+        std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position,
+                                       !appliesTo(result.config.frontend.retry_previous_flow, decoded));
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
@@ -444,7 +447,8 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
              "I-frames: {}\n",
              t.rescued, static_cast<double>(t.rescued) / frames, t.consensus, static_cast<double>(t.consensus) / frames,
              t.bridged_frames);
-  if (config.retry_previous_flow) {
+  // r.has_motion: the frames were decoded from video (raw ones have no vectors).
+  if (appliesTo(config.retry_previous_flow, r.has_motion)) {
     fmt::print(out, "kept by the retry from the previous image flow (retry_previous_flow): {} ({:.2f} per frame)\n",
                t.flow_retried, static_cast<double>(t.flow_retried) / frames);
   }

@@ -78,7 +78,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cameras_model_[static_cast<std::size_t>(c)] = rig.cameras[static_cast<std::size_t>(c)].camera;
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     for (ImagePyramid& pyramid : cam.pyramids)
-      pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth != Presmooth::kOff);
+      pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth != InputScope::kOff);
     for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
@@ -272,7 +272,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   const bool whole_pyramid = stats.bridged[static_cast<std::size_t>(camera)] || mode == PriorMode::kOfThenMv;
   const int prior_levels = whole_pyramid ? all_levels : prior_levels_;
   // retry_previous_flow: a flow under a pixel would start the retry where the plain track started.
-  const bool retry_flow = config_.retry_previous_flow && cam.previous_flow.squaredNorm() >= 1.f;
+  const bool retry_flow = retry_flow_ && cam.previous_flow.squaredNorm() >= 1.f;
   cam.flow_x.clear();
   cam.flow_y.clear();
 
@@ -408,7 +408,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       continue;
     }
     ++ts.kept;
-    if (config_.retry_previous_flow) {
+    if (retry_flow_) {
       cam.flow_x.push_back(result.x() - p.x());
       cam.flow_y.push_back(result.y() - p.y());
     }
@@ -565,8 +565,8 @@ void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out
   stats.clear();
   stats.frame_index = input.frame_index;
   if (std::isfinite(input.depth_hint_m) && input.depth_hint_m > 0.0) average_depth_m_ = input.depth_hint_m;
-  const bool presmooth =
-      config_.presmooth == Presmooth::kAlways || (config_.presmooth == Presmooth::kRawInput && !input.decoded);
+  const bool presmooth = appliesTo(config_.presmooth, input.decoded);
+  retry_flow_ = appliesTo(config_.retry_previous_flow, input.decoded);
   for (int c = 0; c < 2; ++c) {
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     cam.current = 1 - cam.current;

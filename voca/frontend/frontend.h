@@ -200,6 +200,7 @@ class KltFrontend {
   std::array<CameraState, 2> cameras_;
   std::uint64_t next_track_id_ = 1;
   bool have_previous_ = false;
+  bool retry_flow_ = false;  // retry_previous_flow applies to the frame being tracked (its InputScope)
 };
 
 }  // namespace voca

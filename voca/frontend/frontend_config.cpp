@@ -45,21 +45,21 @@ PriorMode requirePriorMode(std::string_view name, std::string_view what) {
   return *mode;
 }
 
-std::string_view presmoothName(Presmooth presmooth) {
-  switch (presmooth) {
-    case Presmooth::kOff:
+std::string_view inputScopeName(InputScope scope) {
+  switch (scope) {
+    case InputScope::kOff:
       return "off";
-    case Presmooth::kRawInput:
+    case InputScope::kRawInput:
       return "raw";
-    case Presmooth::kAlways:
+    case InputScope::kAlways:
       return "always";
   }
   return "off";
 }
 
-std::optional<Presmooth> parsePresmooth(std::string_view name) {
-  for (const Presmooth p : {Presmooth::kOff, Presmooth::kRawInput, Presmooth::kAlways}) {
-    if (name == presmoothName(p)) return p;
+std::optional<InputScope> parseInputScope(std::string_view name) {
+  for (const InputScope scope : {InputScope::kOff, InputScope::kRawInput, InputScope::kAlways}) {
+    if (name == inputScopeName(scope)) return scope;
   }
   return std::nullopt;
 }

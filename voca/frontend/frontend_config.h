@@ -18,12 +18,18 @@ enum class PriorMode : std::uint8_t {
   kMvParallelOf,  // both; kept when only one succeeds or both agree within consensus_tolerance
 };
 
-// Which input is smoothed by [1 2 1]/4 before tracking (FrontendConfig::presmooth).
-enum class Presmooth : std::uint8_t {
+// The frames a frontend key acts on (presmooth, retry_previous_flow). Raw frames lack what decoded
+// ones carry: the codec's smoothing and its motion vectors; some keys make up for that alone.
+enum class InputScope : std::uint8_t {
   kOff,
   kRawInput,  // images that never passed through a video codec (datasets, cameras without encoding)
   kAlways,
 };
+
+// Whether a key of this scope acts on a frame that was (decoded) or was not decoded from video.
+constexpr bool appliesTo(InputScope scope, bool decoded) {
+  return scope == InputScope::kAlways || (scope == InputScope::kRawInput && !decoded);
+}
 
 // Where a new left point is first looked for in the right image.
 enum class StereoGuess : std::uint8_t {
@@ -40,9 +46,9 @@ std::optional<PriorMode> parsePriorMode(std::string_view name);
 std::string priorModeList();
 // parsePriorMode, or InputError "<what>: unknown mode "x" (expected none, mv, ...)".
 PriorMode requirePriorMode(std::string_view name, std::string_view what);
-std::string_view presmoothName(Presmooth presmooth);
+std::string_view inputScopeName(InputScope scope);
 // "off", "raw" or "always"; JSON true and false are read as "always" and "off" by the config reader.
-std::optional<Presmooth> parsePresmooth(std::string_view name);
+std::optional<InputScope> parseInputScope(std::string_view name);
 std::string_view stereoGuessName(StereoGuess guess);
 std::optional<StereoGuess> parseStereoGuess(std::string_view name);
 
@@ -133,12 +139,12 @@ struct FrontendConfig {
   // coarsest level; when the camera moves faster than that (a low frame rate, a fast turn) every
   // point is lost at once and the estimator has nothing to work with. Flow shorter than a pixel is
   // not retried (that track would start where the plain one did). Not in Basalt or the paper.
-  bool retry_previous_flow = false;
+  InputScope retry_previous_flow = InputScope::kOff;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
   // patterns' 2 px sample grid has on sharp images and against sensor noise (see ImagePyramid).
   // kRawInput leaves decoded frames alone: the codec has smoothed them already, and smoothing them
   // again costs the prior modes accuracy (configs/README.md). Not in Basalt or the paper.
-  Presmooth presmooth = Presmooth::kOff;
+  InputScope presmooth = InputScope::kOff;
 };
 
 }  // namespace voca
