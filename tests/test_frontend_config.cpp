@@ -50,9 +50,12 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(e.prior_mode == PriorMode::kMvParallelOf);
   CHECK(e.consensus_tolerance_px2 == 0.05);
   CHECK(e.bridge_iframes);
-  CHECK(e.presmooth == InputScope::kOff);  // not in the paper: off in its configurations
-  CHECK(e.prior_agree_radius_px == 1.0);   // ours (configs/README.md), a speed-up in every shipped config
-  CHECK(e.thin_when_full_px == 8.0);       // ours (configs/README.md): crowded tracks give way when full
+  // Ours (configs/README.md): raw frames only, where no codec smoothed them and no vector bridges a turn.
+  CHECK(e.presmooth == InputScope::kRawInput);
+  CHECK(e.retry_previous_flow == InputScope::kRawInput);
+  CHECK(FrontendConfig{}.presmooth == InputScope::kOff);  // not in Basalt or the paper
+  CHECK(e.prior_agree_radius_px == 1.0);  // ours (configs/README.md), a speed-up in every shipped config
+  CHECK(e.thin_when_full_px == 8.0);      // ours (configs/README.md): crowded tracks give way when full
   const VocaConfig tumvi = loadConfig(shippedConfig("tumvi_vo.json"));
   CHECK(tumvi.frontend.matching_guess == StereoGuess::kAverageDepth);
   CHECK(tumvi.frontend.image_safe_radius_px == 320.0);
@@ -62,9 +65,12 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.thin_when_full_px == 8.0);
   CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.thin_when_full_px == 8.0);
   CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
-  // Ours, measured and off in every file (configs/README.md): for low frame rates and fast cameras.
-  CHECK(e.retry_previous_flow == InputScope::kOff);
-  CHECK(tumvi.frontend.retry_previous_flow == InputScope::kOff);
+  // Ours, off by default (Basalt's behaviour), on raw frames in every file (configs/README.md).
+  CHECK(FrontendConfig{}.retry_previous_flow == InputScope::kOff);
+  CHECK(tumvi.frontend.retry_previous_flow == InputScope::kRawInput);
+  CHECK(tumvi.frontend.presmooth == InputScope::kRawInput);
+  CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.presmooth == InputScope::kRawInput);
+  CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.retry_previous_flow == InputScope::kRawInput);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_previous_flow": true}})"), "x")
             .frontend.retry_previous_flow == InputScope::kAlways);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_previous_flow": "raw"}})"), "x")

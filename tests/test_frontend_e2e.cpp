@@ -482,6 +482,7 @@ TEST_CASE("e2e frontend: micro EuRoC at 500 kbit/s keeps >= 80 % of the raw run'
     f.type = l.motion.pictureType();
     f.t_ns = l.t_ns;
     f.has_motion = true;
+    f.decoded = true;
   }
   const FrontendConfig config = loadConfig(std::filesystem::path(VOCA_SOURCE_DIR) / "configs/euroc_vo.json").frontend;
   const RunResult raw_run = runFrontend(config, rig, raw);
