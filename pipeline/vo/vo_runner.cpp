@@ -76,9 +76,8 @@ class ProgressSink final : public FrameSink {
     suggest_flow_retry_ = false;
     line_.message(
         "hint: the tracker lost {} of {} points from the previous frame: the image may move faster than the KLT "
-        "pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": \"always\" in the config's "
-        "frontend "
-        "section (configs/README.md), or track a video with motion vectors in a prior mode.",
+        "pyramid reaches (a low frame rate, a fast turn). Set \"retry_previous_flow\": \"always\" in the "
+        "config's frontend section (configs/README.md), or track a video with motion vectors in a prior mode.",
         t.previous - t.kept, t.previous);
   }
 
@@ -251,8 +250,8 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                    c));
     }
   }
+  // Decoded frames carry motion vectors; the decode stage marks every frame it hands on.
   result.has_motion = info.kind == SourceKind::kEncoded;
-  const bool decoded = info.kind == SourceKind::kEncoded;  // the decode stage marks every frame it hands on
 
   // The stages, in data-flow order; positions count the source as 0.
   SourceStageOptions source_options;
@@ -317,7 +316,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   if (options.progress) {
     progress =
         std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position,
-                                       !appliesTo(result.config.frontend.retry_previous_flow, decoded));
+                                       !appliesTo(result.config.frontend.retry_previous_flow, result.has_motion));
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
