@@ -559,10 +559,11 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
   // Frames 0-7, frame k moving the image by step(k).
   // decoded: the frames are marked as decoded from video (a scope of "raw" then leaves them alone).
   const auto run = [&](PriorMode mode, bool retry, const std::function<Eigen::Vector2d(int)>& step,
-                       InputScope scope = InputScope::kAlways, bool decoded = false) {
+                       InputScope scope = InputScope::kAlways, bool decoded = false, double min_lost_fraction = 0.0) {
     FrontendConfig config;
     config.prior_mode = mode;
     config.retry_previous_flow = retry ? scope : InputScope::kOff;
+    config.retry_min_lost_fraction = min_lost_fraction;
     KltFrontend frontend(config, rig, {.max_points = 200});
     TrackedStereoFrame out;
     FrontendStats stats;
@@ -633,6 +634,26 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
     retried_total += steady_retried[k].stats.flow_retried;
   }
   CHECK(retried_total <= 3);
+  // retry_min_lost_fraction: half the points lost gates the retry. The steady frames lose a few
+  // points at the border and are tracked exactly as without the retry; the fast frames lose most and
+  // are retried as before.
+  CHECK(same(run(PriorMode::kNone, true, steady, InputScope::kAlways, false, 0.5), steady_plain));
+  const auto gated = run(PriorMode::kNone, true, speeding_up, InputScope::kAlways, false, 0.5);
+  int gated_early = 0;
+  for (std::size_t k = 1; k < 8; ++k) {
+    INFO("frame " << k);
+    const TemporalStats& t = gated[k].stats;
+    // The share the guesses lost is what decides: the retried points were lost by them too.
+    const int lost_by_guesses = t.previous - (t.kept - t.flow_retried);
+    if (2 * lost_by_guesses < t.previous) {
+      CHECK(t.flow_retried == 0);
+      ++gated_early;
+    }
+    if (k < 4) continue;
+    CHECK(gated[k].correct >= gated[k].visible * 8 / 10);
+    CHECK(t.flow_retried >= gated[k].correct * 3 / 4);
+  }
+  CHECK(gated_early >= 1);  // the gate held in a frame of the run
 }
 
 TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the finest levels only") {

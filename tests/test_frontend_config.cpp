@@ -173,6 +173,11 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
 
   message = errorFor(R"({"frontend": {"retry_previous_flow": 1}})");
   CHECK(contains(message, R"(frontend.retry_previous_flow: expected "off", "raw" or "always", got 1)"));
+  message = errorFor(R"({"frontend": {"retry_min_lost_fraction": 1.5}})");
+  CHECK(contains(message, "frontend.retry_min_lost_fraction: expected a number in [0, 1], got 1.5"));
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_min_lost_fraction": 0.5}})"), "x")
+            .frontend.retry_min_lost_fraction == 0.5);
+  CHECK(FrontendConfig{}.retry_min_lost_fraction == 0.0);  // a retry in every frame, as before the key
 
   message = errorFor(R"({"frontend": {"max_iterations": 1e12}})");
   CHECK(contains(message, "frontend.max_iterations: expected an integer"));

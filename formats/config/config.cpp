@@ -73,6 +73,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_agree_radius_px", &FrontendConfig::prior_agree_radius_px},
     {"thin_when_full_px", &FrontendConfig::thin_when_full_px},
     {"retry_previous_flow", ConfigReader<FrontendConfig>{&readInputScope<&FrontendConfig::retry_previous_flow>}},
+    {"retry_min_lost_fraction", &FrontendConfig::retry_min_lost_fraction},
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},

@@ -84,6 +84,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.flow_x, &cam.flow_y}) v->reserve(static_cast<std::size_t>(max_points_));
     cam.traces.reserve(static_cast<std::size_t>(max_points_));
+    cam.retry_candidates.reserve(static_cast<std::size_t>(max_points_));
     // Live points plus two scratch slots (the plain and the prior backward track of one point).
     cam.num_levels = num_levels_;
     cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
@@ -275,6 +276,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   const bool retry_flow = retry_flow_ && cam.previous_flow.squaredNorm() >= 1.f;
   cam.flow_x.clear();
   cam.flow_y.clear();
+  cam.retry_candidates.clear();
 
   for (std::size_t i = 0; i < cam.points.size(); ++i) {
     const Eigen::Vector2f p = cam.points[i];
@@ -357,12 +359,6 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       if (mode == PriorMode::kOfThenMv) run_prior = run_prior && !plain_ok && !same_start;
       if (run_prior && mode != PriorMode::kMvThenOf) prior_ok = attempt(mv, prior_levels, prior_slot, prior_px);
     }
-    // The last resort of every mode (retry_previous_flow): from the same start it would fail again.
-    bool flow_ok = false;
-    Eigen::Vector2f flow_px = p + cam.previous_flow;
-    if (!plain_ok && !prior_ok && retry_flow && (!has_vector || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
-      flow_ok = attempt(cam.previous_flow, all_levels, plain_slot, flow_px);
-    }
     ts.tracked_plain += plain_ok;
     ts.tracked_prior += prior_ok;
 
@@ -385,13 +381,9 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       keep_prior = true;
       result = prior_px;
       ts.rescued += run_plain;  // the plain track was tried and failed
-    } else if (flow_ok) {
-      keep = true;
-      result = flow_px;
-      ++ts.flow_retried;
     }
-    // The kept result's backward templates become the point's templates; everything else is freed.
-    cam.release(forward_slot);
+    // The kept result's backward templates become the point's templates; everything else is freed
+    // (the forward slot once the point's retry is settled).
     cam.release(keep && keep_prior ? plain_slot : prior_slot);
     if (!keep) cam.release(plain_slot);
 
@@ -404,22 +396,27 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     trace.kept = keep;
     cam.traces.push_back(trace);
     if (!keep) {
+      // The last resort of every mode (retry_previous_flow), decided once the whole frame is known:
+      // the point keeps its templates until then. From the same start it would fail again.
+      // It holds its place in the next frame's list, which keeps the ids in ascending order.
+      if (retry_flow && (!has_vector || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
+        cam.retry_candidates.push_back({cam.next_ids.size(), cam.traces.size() - 1, forward_slot});
+        cam.next_ids.push_back(cam.ids[i]);
+        cam.next_points.push_back(p);
+        cam.next_slots.push_back(-1);
+        continue;
+      }
+      cam.release(forward_slot);
       ++ts.lost;
       continue;
     }
-    ++ts.kept;
-    if (retry_flow_) {
-      cam.flow_x.push_back(result.x() - p.x());
-      cam.flow_y.push_back(result.y() - p.y());
-    }
+    cam.release(forward_slot);
     cam.next_ids.push_back(cam.ids[i]);
     cam.next_points.push_back(result);
     cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
-    if (has_vector) {
-      stats.guess_dist_plain_px.push_back((result - p).norm());
-      stats.guess_dist_prior_px.push_back((result - p - mv).norm());
-    }
+    countKept(cam, ts, result, trace, stats);
   }
+  retryFromPreviousFlow(cam, ts, stats);
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
   std::swap(cam.slots, cam.next_slots);
@@ -433,6 +430,67 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     };
     cam.previous_flow = Eigen::Vector2f(median(cam.flow_x), median(cam.flow_y));
   }
+}
+
+void KltFrontend::countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked,
+                            const PointTrace& trace, FrontendStats& stats) const {
+  const Eigen::Vector2f p = trace.previous_px;
+  ++ts.kept;
+  if (retry_flow_) {
+    cam.flow_x.push_back(tracked.x() - p.x());
+    cam.flow_y.push_back(tracked.y() - p.y());
+  }
+  if (trace.has_prior) {
+    stats.guess_dist_plain_px.push_back((tracked - p).norm());
+    stats.guess_dist_prior_px.push_back((tracked - trace.prior_px).norm());
+  }
+}
+
+void KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats) {
+  if (cam.retry_candidates.empty()) return;
+  // A frame whose guesses lost only a few points is an ordinary frame: those points left the view,
+  // were occluded or changed, and a retry would mostly find look-alikes that pass the round trip.
+  // When the guesses lost a large share, the image moved beyond their reach and the retry is the
+  // only way to keep the frame's tracks (retry_min_lost_fraction).
+  const int lost_by_guesses = ts.previous - ts.kept;
+  const bool retry = static_cast<double>(lost_by_guesses) >= config_.retry_min_lost_fraction * ts.previous;
+  const ImagePyramid& from = cam.prev();
+  const ImagePyramid& to = cam.cur();
+  bool any_lost = false;
+  for (const RetryCandidate& candidate : cam.retry_candidates) {
+    PointTrace& trace = cam.traces[candidate.trace];
+    const int slot = retry ? cam.acquire() : -1;
+    Eigen::Vector2f tracked = trace.previous_px + cam.previous_flow;
+    const bool ok = retry && trackChecked(cam.slot(candidate.slot), from, to, trace.previous_px, cam.previous_flow,
+                                          num_levels_, cam.slot(slot), tracked);
+    cam.release(candidate.slot);
+    if (!ok) {
+      if (slot >= 0) cam.release(slot);
+      cam.next_slots[candidate.next] = -1;
+      any_lost = true;
+      ++ts.lost;
+      continue;
+    }
+    trace.tracked_px = tracked;
+    trace.kept = true;
+    ++ts.flow_retried;
+    cam.next_points[candidate.next] = tracked;
+    cam.next_slots[candidate.next] = slot;
+    countKept(cam, ts, tracked, trace, stats);
+  }
+  if (!any_lost) return;
+  // The lost candidates leave their places; the others keep theirs, so the ids still ascend.
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < cam.next_ids.size(); ++i) {
+    if (cam.next_slots[i] < 0) continue;
+    cam.next_ids[out] = cam.next_ids[i];
+    cam.next_points[out] = cam.next_points[i];
+    cam.next_slots[out] = cam.next_slots[i];
+    ++out;
+  }
+  cam.next_ids.resize(out);
+  cam.next_points.resize(out);
+  cam.next_slots.resize(out);
 }
 
 void KltFrontend::thinTracks(FrontendStats& stats) {

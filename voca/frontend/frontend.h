@@ -95,6 +95,12 @@ class KltFrontend {
   const FrontendConfig& config() const { return config_; }
 
  private:
+  // A point every guess lost, held for the frame-level retry decision.
+  struct RetryCandidate {
+    std::size_t next = 0;   // its place in the next frame's lists
+    std::size_t trace = 0;  // index into the camera's traces
+    int slot = 0;           // the point's templates
+  };
   struct CameraState {
     std::array<ImagePyramid, 2> pyramids;
     int current = 0;
@@ -112,6 +118,9 @@ class KltFrontend {
     // before any), and that step's displacements per axis as scratch for the median.
     Eigen::Vector2f previous_flow = Eigen::Vector2f::Zero();
     std::vector<float> flow_x, flow_y;
+    // The points every guess lost this frame, waiting for the frame-level retry decision; each
+    // still holds its templates (slot).
+    std::vector<RetryCandidate> retry_candidates;
     std::vector<PointTrace> traces;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
@@ -166,6 +175,12 @@ class KltFrontend {
   // thin_when_full_px: drops the younger of two left tracks too close together, in both cameras.
   void thinTracks(FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
+  // The statistics and the image flow of a point the temporal step kept at tracked.
+  void countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked, const PointTrace& trace,
+                 FrontendStats& stats) const;
+  // retry_previous_flow on the points every guess lost, when they are enough of the frame's
+  // (retry_min_lost_fraction); the others are lost.
+  void retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);

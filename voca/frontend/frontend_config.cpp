@@ -118,6 +118,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
   checkReal(context, "thin_when_full_px", c.thin_when_full_px, 0.0, 1000.0, false);
   checkReal(context, "prior_rescue_min_px", c.prior_rescue_min_px, 0.0, 1e6, false);
+  checkReal(context, "retry_min_lost_fraction", c.retry_min_lost_fraction, 0.0, 1.0, false);
 }
 
 }  // namespace voca
