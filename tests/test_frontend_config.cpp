@@ -53,6 +53,7 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   // Ours (configs/README.md): raw frames only, where no codec smoothed them and no vector bridges a turn.
   CHECK(e.presmooth == InputScope::kRawInput);
   CHECK(e.retry_previous_flow == InputScope::kRawInput);
+  CHECK(e.retry_min_lost_fraction == 0.5);                // only in frames where the guesses lost most points
   CHECK(FrontendConfig{}.presmooth == InputScope::kOff);  // not in Basalt or the paper
   CHECK(e.prior_agree_radius_px == 1.0);  // ours (configs/README.md), a speed-up in every shipped config
   CHECK(e.thin_when_full_px == 8.0);      // ours (configs/README.md): crowded tracks give way when full
@@ -71,6 +72,8 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.presmooth == InputScope::kRawInput);
   CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.presmooth == InputScope::kRawInput);
   CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.retry_previous_flow == InputScope::kRawInput);
+  CHECK(tumvi.frontend.retry_min_lost_fraction == 0.5);
+  CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.retry_min_lost_fraction == 0.5);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_previous_flow": true}})"), "x")
             .frontend.retry_previous_flow == InputScope::kAlways);
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"retry_previous_flow": "raw"}})"), "x")
