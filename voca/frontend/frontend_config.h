@@ -141,9 +141,9 @@ struct FrontendConfig {
   // not retried (that track would start where the plain one did). Not in Basalt or the paper.
   InputScope retry_previous_flow = InputScope::kOff;
   // The retry runs only in frames where the guesses lost at least this share of the previous frame's
-  // points. In an ordinary frame the lost points left the view, were occluded or changed, and a
-  // retry finds look-alikes among them; a turn beyond the pyramid's reach loses most at once.
-  // 0 = retry in every frame.
+  // points: a turn beyond the pyramid's reach loses most of them at once, an ordinary frame a few
+  // (they left the view, were occluded or changed). Retrying the few as well raised raw MH_03's ATE
+  // (configs/README.md). 0 = retry in every frame.
   double retry_min_lost_fraction = 0.0;
   // Smooth the full-resolution image by [1 2 1]/4 before tracking, against the sub-pixel bias the
   // patterns' 2 px sample grid has on sharp images and against sensor noise (see ImagePyramid).
