@@ -416,10 +416,13 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
     countKept(cam, ts, result, trace, stats);
   }
-  retryFromPreviousFlow(cam, ts, stats);
+  const bool retry_lost_some = retryFromPreviousFlow(cam, ts, stats);
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
   std::swap(cam.slots, cam.next_slots);
+  // The candidates the retry lost leave their places (slot -1, no templates); the others keep
+  // theirs, so the ids still ascend.
+  if (retry_lost_some) cam.retain([&](std::size_t i, std::size_t) { return cam.slots[i] >= 0; });
   // The image flow the next frame's retries start from. With no track kept it stays what it was:
   // the camera's last known motion beats none.
   if (!cam.flow_x.empty()) {
@@ -446,8 +449,8 @@ void KltFrontend::countKept(CameraState& cam, TemporalStats& ts, const Eigen::Ve
   }
 }
 
-void KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats) {
-  if (cam.retry_candidates.empty()) return;
+bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats) {
+  if (cam.retry_candidates.empty()) return false;
   // An ordinary frame loses a few points (they left the view, were occluded or changed); a turn
   // beyond the pyramid's reach loses most at once, and there the retry is the only way to keep the
   // frame's tracks. Retrying the few as well raised raw MH_03's ATE (retry_min_lost_fraction,
@@ -478,19 +481,7 @@ void KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, Fro
     cam.next_slots[candidate.next] = slot;
     countKept(cam, ts, tracked, trace, stats);
   }
-  if (!any_lost) return;
-  // The lost candidates leave their places; the others keep theirs, so the ids still ascend.
-  std::size_t out = 0;
-  for (std::size_t i = 0; i < cam.next_ids.size(); ++i) {
-    if (cam.next_slots[i] < 0) continue;
-    cam.next_ids[out] = cam.next_ids[i];
-    cam.next_points[out] = cam.next_points[i];
-    cam.next_slots[out] = cam.next_slots[i];
-    ++out;
-  }
-  cam.next_ids.resize(out);
-  cam.next_points.resize(out);
-  cam.next_slots.resize(out);
+  return any_lost;
 }
 
 void KltFrontend::thinTracks(FrontendStats& stats) {

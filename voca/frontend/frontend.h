@@ -135,13 +135,14 @@ class KltFrontend {
     void release(int index) { free_slots.push_back(index); }
     void resetSlots();
     // Keeps, in order, the points for which keep(index, kept_so_far) is true and frees the others'
-    // slots. keep may read the points already kept: they sit at [0, kept_so_far).
+    // slots (a slot below zero holds none). keep may read the points already kept: they sit at
+    // [0, kept_so_far).
     template <class Keep>
     void retain(Keep keep) {
       std::size_t out = 0;
       for (std::size_t i = 0; i < ids.size(); ++i) {
         if (!keep(i, out)) {
-          release(slots[i]);
+          if (slots[i] >= 0) release(slots[i]);
           continue;
         }
         ids[out] = ids[i];
@@ -179,8 +180,8 @@ class KltFrontend {
   void countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked, const PointTrace& trace,
                  FrontendStats& stats) const;
   // retry_previous_flow on the points every guess lost, when they are enough of the frame's
-  // (retry_min_lost_fraction); the others are lost.
-  void retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats);
+  // (retry_min_lost_fraction); the others are lost and get slot -1. True when any was lost.
+  bool retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
