@@ -239,6 +239,28 @@ TEST_CASE("patch: coarse-to-fine alignment recovers a known shift, rotation and 
   CHECK(alignPatch(pb.level(0), tmpl, pattern52(), params, outside) == AlignStatus::kTooFewPoints);
 }
 
+TEST_CASE("patch: pyramid templates built level by level equal those built at once") {
+  const WaveTexture texture(7, 48, 5.0, 30.0);
+  const int w = 200, h = 160;
+  const GrayImage image = renderArbitrary(w, h, [&](double x, double y) { return texture.at(x, y); });
+  ImagePyramid pyramid(w, h, 4);
+  pyramid.build(image.view());
+  const Eigen::Vector2f px(97.3f, 71.8f);
+  std::array<PatchTemplate, 4> at_once, later;
+  buildPyramidPatch(pyramid, px, pattern52(), at_once);
+  // The finest two now (a round trip on two levels), the rest when a track needs them.
+  buildPyramidPatch(pyramid, px, pattern52(), std::span<PatchTemplate>(later).first(2));
+  CHECK_FALSE(later[2].valid);
+  buildPyramidPatch(pyramid, px, pattern52(), later, 2);
+  for (std::size_t level = 0; level < at_once.size(); ++level) {
+    INFO("level " << level);
+    REQUIRE(at_once[level].valid);
+    CHECK(later[level].valid);
+    CHECK(later[level].value == at_once[level].value);
+    for (int r = 0; r < 3; ++r) CHECK(later[level].step[r] == at_once[level].step[r]);
+  }
+}
+
 TEST_CASE("patch: skip_coarse_outside lets the finer levels track a patch the coarse levels lose at the border") {
   const WaveTexture texture(11, 48, 6.0, 60.0, 40.0);
   const int w = 240, h = 200;
@@ -704,6 +726,51 @@ TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the fi
     CHECK(rescue_finest.correct == rescue_all.correct);
     CHECK(rescue_finest.kept == rescue_all.kept);
     CHECK(rescue_finest.correct >= rescue_finest.visible * 3 / 4);
+  }
+}
+
+TEST_CASE("frontend: a frame without vectors after motion-vector tracks builds the coarse templates it needs") {
+  // mv with prior_pyramid_levels 0: the round trips of frames 1-2 run on level 0 and build only its
+  // templates. Frame 3 is an I-frame, unbridged: every point falls back to the plain track, whose
+  // 12 px motion needs the coarse levels (see the test above), so their templates must be built then,
+  // from the previous image at each point's position. Missing, the coarse levels would be skipped as
+  // invalid and the plain track would stay in level 0's basin.
+  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(12.0, 5.0)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  const Eigen::Vector2f flow = seq.flow.cast<float>();
+  const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.5f, -0.25f);
+  MotionField field_left(seq.kWidth, seq.kHeight), field_right(seq.kWidth, seq.kHeight);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kMv;
+  config.prior_pyramid_levels = 0;
+  config.bridge_iframes = false;
+  KltFrontend frontend(config, rig, {.max_points = 200});
+  TrackedStereoFrame frame;
+  FrontendStats stats;
+  for (int k = 0; k < 4; ++k) {
+    seq.render(k);
+    DecodedStereoFrame in = seq.input(k);
+    const PictureType type = k == 3 ? PictureType::kI : PictureType::kP;
+    uniformField(field_left, seq.kWidth, seq.kHeight, coded, type);
+    uniformField(field_right, seq.kWidth, seq.kHeight, coded, type);
+    in.motion = {field_left, field_right};
+    in.has_motion = true;
+    frontend.track(in, frame, stats);
+    if (k == 0) continue;
+    INFO("frame " << k);
+    int visible = 0, correct = 0;
+    for (const PointTrace& t : frontend.traces(0)) {
+      const Eigen::Vector2f truth = t.previous_px + flow;
+      visible +=
+          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
+      if (t.kept) correct += (t.tracked_px - truth).norm() < 0.1f;
+    }
+    CHECK(stats.temporal[0].with_vector == (k == 3 ? 0 : stats.temporal[0].previous));
+    CHECK(stats.temporal[0].tracked_plain == (k == 3 ? stats.temporal[0].kept : 0));
+    REQUIRE(visible >= 20);
+    // Frame 3: 48 of 64 at the true position (plain KLT at 12 px); 10 with the coarse levels missing.
+    CHECK(correct >= visible * 2 / 3);
+    CHECK(stats.temporal[0].kept - correct <= 2);
   }
 }
 

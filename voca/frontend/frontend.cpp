@@ -89,6 +89,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.num_levels = num_levels_;
     cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
     cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
+    cam.built_levels.assign(static_cast<std::size_t>(max_points_ + 2), 0);
     cam.resetSlots();
     cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes, config_.prior_reject_inconsistent);
   }
@@ -187,8 +188,8 @@ bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const Ima
 
 bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                                 const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                                const Eigen::Vector2f& fine_start, int levels,
-                                std::span<PatchTemplate> backward) const {
+                                const Eigen::Vector2f& fine_start, int levels, CameraState& owner,
+                                int backward_slot) const {
   // The backward track starts from the negated guess, so a correct prior lands it near p again. A
   // check on fewer levels than the forward track starts where undoing the forward track's coarse
   // levels would put it: p plus what its finer levels moved.
@@ -196,19 +197,20 @@ bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to
   const Eigen::Vector2f start =
       split < levels ? Eigen::Vector2f(p + (tracked - fine_start)) : Eigen::Vector2f(tracked - flow_guess);
   SE2f T_backward(0.f, start);
-  buildPyramidPatch(to, tracked, *pattern_, backward);  // every level: the next frame's forward templates
-  if (trackPatch(backward.first(static_cast<std::size_t>(split)), from, *pattern_, align_, T_backward) !=
-      AlignStatus::kConverged)
-    return false;
+  // The next frame's forward templates, on the levels the check needs; the others on demand.
+  const std::span<PatchTemplate> backward = owner.slot(backward_slot).first(static_cast<std::size_t>(split));
+  buildPyramidPatch(to, tracked, *pattern_, backward);
+  owner.built_levels[static_cast<std::size_t>(backward_slot)] = split;
+  if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
   return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
 }
 
 bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                                const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
-                               std::span<PatchTemplate> backward, Eigen::Vector2f& result) const {
+                               CameraState& owner, int backward_slot, Eigen::Vector2f& result) const {
   Eigen::Vector2f tracked, fine_start;
   if (!trackForward(forward, to, p, flow_guess, levels, tracked, fine_start)) return false;
-  if (!checkBackward(from, to, p, tracked, flow_guess, fine_start, levels, backward)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, fine_start, levels, owner, backward_slot)) return false;
   result = tracked;
   return true;
 }
@@ -286,7 +288,9 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       prefetchPyramidPatch(to, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
       prefetchPyramidPatch(from, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
       // And its templates, written a frame ago and long out of the nearer caches.
-      prefetchTemplates(cam.slot(cam.slots[i + 1]));
+      const int next_slot = cam.slots[i + 1];
+      prefetchTemplates(
+          cam.slot(next_slot).first(static_cast<std::size_t>(cam.built_levels[static_cast<std::size_t>(next_slot)])));
     }
     const MotionBlock* block = nullptr;
     if (field != nullptr)
@@ -322,18 +326,18 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     }
     const int forward_slot = cam.slots[i];
     const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
+    const auto forward = [&](int levels) { return cam.trackedTemplates(forward_slot, from, p, levels, *pattern_); };
     const auto attempt = [&](const Eigen::Vector2f& guess, int levels, int backward_slot, Eigen::Vector2f& tracked) {
-      return trackChecked(cam.slot(forward_slot), from, to, p, guess, levels, cam.slot(backward_slot), tracked);
+      return trackChecked(forward(levels), from, to, p, guess, levels, cam, backward_slot, tracked);
     };
     if (mode == PriorMode::kMvParallelOf && run_prior) {
       // The plain track first, with its round trip. When the prior's forward track agrees with a
       // plain track that passed, the point is kept from the plain track whatever the prior's round
       // trip says, so that one is skipped; the outcome equals running both checks.
       Eigen::Vector2f plain_fine_start, prior_fine_start;
-      const bool plain_forward =
-          trackForward(cam.slot(forward_slot), to, p, zero, all_levels, plain_px, plain_fine_start);
-      plain_ok = plain_forward &&
-                 checkBackward(from, to, p, plain_px, zero, plain_fine_start, all_levels, cam.slot(plain_slot));
+      const bool plain_forward = trackForward(forward(all_levels), to, p, zero, all_levels, plain_px, plain_fine_start);
+      plain_ok =
+          plain_forward && checkBackward(from, to, p, plain_px, zero, plain_fine_start, all_levels, cam, plain_slot);
       const bool confirmed = plain_ok && agree_radius2 > 0.f && (p + mv - plain_px).squaredNorm() <= agree_radius2;
       ts.prior_confirmed += confirmed && !same_start;
       if (same_start || confirmed) {
@@ -343,10 +347,10 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
         prior_ok = false;  // it could only rescue the point: too short a vector for that (prior_rescue_min_px)
       } else {
         const bool prior_forward =
-            trackForward(cam.slot(forward_slot), to, p, mv, prior_levels, prior_px, prior_fine_start);
+            trackForward(forward(prior_levels), to, p, mv, prior_levels, prior_px, prior_fine_start);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
-        prior_ok = agree || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_fine_start, prior_levels,
-                                                            cam.slot(prior_slot)));
+        prior_ok = agree || (prior_forward &&
+                             checkBackward(from, to, p, prior_px, mv, prior_fine_start, prior_levels, cam, prior_slot));
       }
     } else {
       // The retry of the sequential modes runs only from a different start: from the same one it
@@ -464,8 +468,9 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, Fro
     PointTrace& trace = cam.traces[candidate.trace];
     const int slot = retry ? cam.acquire() : -1;
     Eigen::Vector2f tracked = trace.previous_px + cam.previous_flow;
-    const bool ok = retry && trackChecked(cam.slot(candidate.slot), from, to, trace.previous_px, cam.previous_flow,
-                                          num_levels_, cam.slot(slot), tracked);
+    const bool ok =
+        retry && trackChecked(cam.trackedTemplates(candidate.slot, from, trace.previous_px, num_levels_, *pattern_),
+                              from, to, trace.previous_px, cam.previous_flow, num_levels_, cam, slot, tracked);
     cam.release(candidate.slot);
     if (!ok) {
       if (slot >= 0) cam.release(slot);
@@ -539,6 +544,7 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
     const std::uint64_t id = next_track_id_++;
     const int left_slot = left.acquire();
     buildPyramidPatch(left.cur(), p, *pattern_, left.slot(left_slot));
+    left.built_levels[static_cast<std::size_t>(left_slot)] = num_levels_;
     left.ids.push_back(id);
     left.points.push_back(p);
     left.slots.push_back(left_slot);
@@ -552,7 +558,7 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
     }
     Eigen::Vector2f matched;
     const int right_slot = right.acquire();
-    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, right.slot(right_slot),
+    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, right, right_slot,
                      matched)) {
       right.ids.push_back(id);
       right.points.push_back(matched);
@@ -575,6 +581,7 @@ void KltFrontend::detectRightOnly(const DecodedStereoFrame& input, FrontendStats
   for (const Eigen::Vector2f& p : new_points_) {
     const int slot = right.acquire();
     buildPyramidPatch(right.cur(), p, *pattern_, right.slot(slot));
+    right.built_levels[static_cast<std::size_t>(slot)] = num_levels_;
     right.ids.push_back(next_track_id_++);
     right.points.push_back(p);
     right.slots.push_back(slot);

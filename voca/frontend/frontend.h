@@ -112,6 +112,12 @@ class KltFrontend {
     std::vector<int> slots, next_slots;
     std::vector<PatchTemplate> pool;
     std::vector<int> free_slots;
+    // Per slot, how many of its levels (from level 0) hold templates. A round-trip check builds only
+    // the levels it runs on; the coarser ones are built when a track first needs them
+    // (trackedTemplates), at the point's position in its image, which is prev() by then. A
+    // motion-vector guess runs on the finest levels only (prior_pyramid_levels), so in the modes
+    // that track from the vector most points never need them.
+    std::vector<int> built_levels;
     int num_levels = 0;
     IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     // retry_previous_flow: the median displacement of the last temporal step's kept tracks (zero
@@ -133,6 +139,17 @@ class KltFrontend {
       return index;
     }
     void release(int index) { free_slots.push_back(index); }
+    // The first `levels` templates of a slot, the missing ones built at px in `pyramid` first.
+    std::span<const PatchTemplate> trackedTemplates(int index, const ImagePyramid& pyramid, const Eigen::Vector2f& px,
+                                                    int levels, const PatchPattern& pattern) {
+      int& built = built_levels[static_cast<std::size_t>(index)];
+      const std::span<PatchTemplate> templates = slot(index).first(static_cast<std::size_t>(levels));
+      if (built < levels) {
+        buildPyramidPatch(pyramid, px, pattern, templates, static_cast<std::size_t>(built));
+        built = levels;
+      }
+      return templates;
+    }
     void resetSlots();
     // Keeps, in order, the points for which keep(index, kept_so_far) is true and frees the others'
     // slots (a slot below zero holds none). keep may read the points already kept: they sit at
@@ -159,10 +176,11 @@ class KltFrontend {
   // Forward-backward tracking from `from` to `to` with a flow guess on the finest `levels` pyramid
   // levels; true and the converged position when both directions converge and the round trip returns
   // within max_recovered_dist2. `forward` holds the templates of p in `from` (shared by all guesses
-  // of one point); `backward` receives the templates at the result in `to`, on every level.
+  // of one point); slot `backward_slot` of `owner` receives the templates at the result in `to`, on
+  // the levels the round trip runs on (built_levels).
   bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
-                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
-                    std::span<PatchTemplate> backward, Eigen::Vector2f& result) const;
+                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels, CameraState& owner,
+                    int backward_slot, Eigen::Vector2f& result) const;
   // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
   // fine_start: where the forward track's levels below backward_levels_ started (p + flow_guess when
   // the check runs on every level the forward track ran on).
@@ -171,7 +189,7 @@ class KltFrontend {
                     Eigen::Vector2f& fine_start) const;
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                      const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                     const Eigen::Vector2f& fine_start, int levels, std::span<PatchTemplate> backward) const;
+                     const Eigen::Vector2f& fine_start, int levels, CameraState& owner, int backward_slot) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   // thin_when_full_px: drops the younger of two left tracks too close together, in both cameras.
   void thinTracks(FrontendStats& stats);

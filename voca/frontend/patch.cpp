@@ -223,8 +223,8 @@ AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const
 }
 
 void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
-                       std::span<PatchTemplate> levels) {
-  for (std::size_t level = 0; level < levels.size(); ++level) {
+                       std::span<PatchTemplate> levels, std::size_t first_level) {
+  for (std::size_t level = first_level; level < levels.size(); ++level) {
     levels[level].build(pyramid.level(static_cast<int>(level)), px / static_cast<float>(1 << level), pattern);
   }
 }

@@ -116,10 +116,11 @@ struct AlignParams {
 AlignStatus alignPatch(const FloatView& target, const PatchTemplate& tmpl, const PatchPattern& pattern,
                        const AlignParams& params, SE2f& T, bool coarse = false);
 
-// The templates of one point on every level of a pyramid: levels[l] at px / 2^l in level l, for
-// l < levels.size(). Built once and used for every guess tracked from that point.
+// The templates of one point on the levels of a pyramid: levels[l] at px / 2^l in level l, for
+// first_level <= l < levels.size(). Built once and used for every guess tracked from that point; a
+// level depends on nothing but its image and px, so levels built later equal those built at once.
 void buildPyramidPatch(const ImagePyramid& pyramid, const Eigen::Vector2f& px, const PatchPattern& pattern,
-                       std::span<PatchTemplate> levels);
+                       std::span<PatchTemplate> levels, std::size_t first_level = 0);
 
 // Asks the memory system for the pixels that patches near px (level-0 pixels, within `margin` level-0
 // pixels of it) read on levels 0 .. num_levels-1 of the pyramid, without waiting for them. Purely a
