@@ -351,6 +351,20 @@ TEST_CASE("detector: corners of squares, one per empty cell, border, mask and th
 
 namespace {
 
+// A temporal step's points against the true image flow: `visible` counts the previous points whose
+// true position stays inside the image (patch margin), `correct` the kept ones within 0.1 px of it
+// (the 8-bit textures' rounding).
+struct FlowScore {
+  int visible = 0;
+  int correct = 0;
+  void add(const PointTrace& t, const Eigen::Vector2f& flow, int width, int height) {
+    const Eigen::Vector2f truth = t.previous_px + flow;
+    visible += truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= static_cast<float>(width) - 10.f &&
+               truth.y() <= static_cast<float>(height) - 10.f;
+    if (t.kept) correct += (t.tracked_px - truth).norm() < 0.1f;
+  }
+};
+
 // A fronto-parallel textured plane at depth_m seen by a pinhole stereo pair moving sideways: image
 // content moves by `flow` per frame, the right image is the left shifted by the disparity.
 struct PlaneSequence {
@@ -376,16 +390,19 @@ struct PlaneSequence {
     in.frame_index = frame;
     return in;
   }
+  // Renders and tracks frame k with `field` as both cameras' motion.
+  void trackFrame(KltFrontend& frontend, int k, const MotionField& field, TrackedStereoFrame& frame,
+                  FrontendStats& stats) {
+    render(k);
+    DecodedStereoFrame in = input(k);
+    in.motion = {field, field};
+    in.has_motion = true;
+    frontend.track(in, frame, stats);
+  }
   // Renders and tracks frames 0 .. frames-1, every one with the same motion field in both cameras.
   void trackWithField(KltFrontend& frontend, int frames, const MotionField& field, TrackedStereoFrame& frame,
                       FrontendStats& stats) {
-    for (int k = 0; k < frames; ++k) {
-      render(k);
-      DecodedStereoFrame in = input(k);
-      in.motion = {field, field};
-      in.has_motion = true;
-      frontend.track(in, frame, stats);
-    }
+    for (int k = 0; k < frames; ++k) trackFrame(frontend, k, field, frame, stats);
   }
 };
 
@@ -489,12 +506,10 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
   const Eigen::Vector2f flow = seq.flow.cast<float>();
   // Coded vectors are approximate: off by a pixel here.
   const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.75f, -0.5f);
-  MotionField field_left(seq.kWidth, seq.kHeight), field_right(seq.kWidth, seq.kHeight);
+  MotionField field(seq.kWidth, seq.kHeight);
 
-  struct Step {
+  struct Step : FlowScore {
     TemporalStats stats;
-    int visible = 0;       // previous points whose true position stays inside the image (patch margin)
-    int correct = 0;       // kept points within 0.1 px of the true position
     int prior_closer = 0;  // kept points with a vector whose prior guess lies within 1.5 px of the result
   };
   const auto run = [&](PriorMode mode, bool bridge, PictureType third_type, double rescue_min_px = 0.0) {
@@ -507,22 +522,11 @@ TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames b
     FrontendStats stats;
     std::array<Step, 3> result{};
     for (int k = 0; k < 3; ++k) {
-      seq.render(k);
-      DecodedStereoFrame in = seq.input(k);
-      const PictureType type = k == 2 ? third_type : PictureType::kP;
-      uniformField(field_left, seq.kWidth, seq.kHeight, coded, type);
-      uniformField(field_right, seq.kWidth, seq.kHeight, coded, type);
-      in.motion = {field_left, field_right};
-      in.has_motion = true;
-      frontend.track(in, frame, stats);
+      uniformField(field, seq.kWidth, seq.kHeight, coded, k == 2 ? third_type : PictureType::kP);
+      seq.trackFrame(frontend, k, field, frame, stats);
       Step& step = result[static_cast<std::size_t>(k)];
       step.stats = stats.temporal[0];
-      for (const PointTrace& t : frontend.traces(0)) {
-        const Eigen::Vector2f truth = t.previous_px + flow;
-        step.visible +=
-            truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
-        if (t.kept) step.correct += (t.tracked_px - truth).norm() < 0.1f;
-      }
+      for (const PointTrace& t : frontend.traces(0)) step.add(t, flow, seq.kWidth, seq.kHeight);
       for (std::size_t i = 0; i < stats.guess_dist_prior_px.size(); ++i) {
         step.prior_closer += stats.guess_dist_prior_px[i] < 1.5f && stats.guess_dist_plain_px[i] > 40.f;
       }
@@ -572,10 +576,8 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
   constexpr int kWidth = PlaneSequence::kWidth, kHeight = PlaneSequence::kHeight;
   const StereoRig rig = voca::test::pinholeRig(kWidth, kHeight, PlaneSequence::kFocal, PlaneSequence::kBaseline);
   const double disparity = PlaneSequence::kFocal * PlaneSequence::kBaseline / PlaneSequence::kDepth;
-  struct Frame {
+  struct Frame : FlowScore {
     TemporalStats stats;
-    int visible = 0;  // previous points whose true position stays inside the image (patch margin)
-    int correct = 0;  // kept points within 0.1 px of the true position
     std::vector<Eigen::Vector2f> kept;
   };
   // Frames 0-7, frame k moving the image by step(k).
@@ -606,11 +608,8 @@ TEST_CASE("frontend: retry_previous_flow keeps tracking a camera that speeds up 
       f.stats = stats.temporal[0];
       const Eigen::Vector2f flow = step(k).cast<float>();
       for (const PointTrace& t : frontend.traces(0)) {
-        const Eigen::Vector2f truth = t.previous_px + flow;
-        f.visible += truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= kWidth - 10.f && truth.y() <= kHeight - 10.f;
-        if (!t.kept) continue;
-        f.correct += (t.tracked_px - truth).norm() < 0.1f;
-        f.kept.push_back(t.tracked_px);
+        f.add(t, flow, kWidth, kHeight);
+        if (t.kept) f.kept.push_back(t.tracked_px);
       }
     }
     return frames;
@@ -686,8 +685,8 @@ TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the fi
     const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
     const Eigen::Vector2f flow = seq.flow.cast<float>();
     MotionField field(seq.kWidth, seq.kHeight);
-    struct Outcome {
-      int visible = 0, correct = 0, kept = 0;
+    struct Outcome : FlowScore {
+      int kept = 0;
     };
     const auto run = [&](int prior_pyramid_levels, const Eigen::Vector2f& vector_error,
                          PriorMode mode = PriorMode::kMv) {
@@ -701,12 +700,7 @@ TEST_CASE("frontend: prior_pyramid_levels tracks motion-vector guesses on the fi
       seq.trackWithField(frontend, 2, field, frame, stats);
       Outcome outcome;
       outcome.kept = stats.temporal[0].kept;
-      for (const PointTrace& t : frontend.traces(0)) {
-        const Eigen::Vector2f truth = t.previous_px + flow;
-        outcome.visible +=
-            truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
-        if (t.kept) outcome.correct += (t.tracked_px - truth).norm() < 0.1f;
-      }
+      for (const PointTrace& t : frontend.traces(0)) outcome.add(t, flow, seq.kWidth, seq.kHeight);
       return outcome;
     };
     // A vector within a pixel: level 0 alone finds the true position (80 %, as in the test above).
@@ -739,7 +733,7 @@ TEST_CASE("frontend: a frame without vectors after motion-vector tracks builds t
   const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
   const Eigen::Vector2f flow = seq.flow.cast<float>();
   const Eigen::Vector2f coded = flow + Eigen::Vector2f(0.5f, -0.25f);
-  MotionField field_left(seq.kWidth, seq.kHeight), field_right(seq.kWidth, seq.kHeight);
+  MotionField field(seq.kWidth, seq.kHeight);
   FrontendConfig config;
   config.prior_mode = PriorMode::kMv;
   config.prior_pyramid_levels = 0;
@@ -748,29 +742,18 @@ TEST_CASE("frontend: a frame without vectors after motion-vector tracks builds t
   TrackedStereoFrame frame;
   FrontendStats stats;
   for (int k = 0; k < 4; ++k) {
-    seq.render(k);
-    DecodedStereoFrame in = seq.input(k);
-    const PictureType type = k == 3 ? PictureType::kI : PictureType::kP;
-    uniformField(field_left, seq.kWidth, seq.kHeight, coded, type);
-    uniformField(field_right, seq.kWidth, seq.kHeight, coded, type);
-    in.motion = {field_left, field_right};
-    in.has_motion = true;
-    frontend.track(in, frame, stats);
+    uniformField(field, seq.kWidth, seq.kHeight, coded, k == 3 ? PictureType::kI : PictureType::kP);
+    seq.trackFrame(frontend, k, field, frame, stats);
     if (k == 0) continue;
     INFO("frame " << k);
-    int visible = 0, correct = 0;
-    for (const PointTrace& t : frontend.traces(0)) {
-      const Eigen::Vector2f truth = t.previous_px + flow;
-      visible +=
-          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
-      if (t.kept) correct += (t.tracked_px - truth).norm() < 0.1f;
-    }
+    FlowScore score;
+    for (const PointTrace& t : frontend.traces(0)) score.add(t, flow, seq.kWidth, seq.kHeight);
     CHECK(stats.temporal[0].with_vector == (k == 3 ? 0 : stats.temporal[0].previous));
     CHECK(stats.temporal[0].tracked_plain == (k == 3 ? stats.temporal[0].kept : 0));
-    REQUIRE(visible >= 20);
+    REQUIRE(score.visible >= 20);
     // Frame 3: 48 of 64 at the true position (plain KLT at 12 px); 10 with the coarse levels missing.
-    CHECK(correct >= visible * 2 / 3);
-    CHECK(stats.temporal[0].kept - correct <= 2);
+    CHECK(score.correct >= score.visible * 2 / 3);
+    CHECK(stats.temporal[0].kept - score.correct <= 2);
   }
 }
 
@@ -1071,7 +1054,6 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
     MotionField field(seq.kWidth, seq.kHeight);
     TrackedStereoFrame frame;
     FrontendStats stats;
-    int correct = 0, in_odd_blocks = 0, visible = 0;
     for (int k = 0; k < 2; ++k) {
       seq.render(k);
       DecodedStereoFrame in = seq.input(k);
@@ -1088,16 +1070,15 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
       in.has_motion = true;
       frontend.track(in, frame, stats);
     }
+    FlowScore score;
+    int in_odd_blocks = 0;
     for (const PointTrace& t : frontend.traces(0)) {
-      const Eigen::Vector2f truth = t.previous_px + flow;
-      visible +=
-          truth.x() >= 9.f && truth.y() >= 9.f && truth.x() <= seq.kWidth - 10.f && truth.y() <= seq.kHeight - 10.f;
-      if (t.kept) correct += (t.tracked_px - truth).norm() < 0.1f;
+      score.add(t, flow, seq.kWidth, seq.kHeight);
       const int bx = static_cast<int>(std::lround(t.previous_px.x())) / block_px * block_px;
       const int by = static_cast<int>(std::lround(t.previous_px.y())) / block_px * block_px;
       in_odd_blocks += odd(bx, by).has_value();
     }
-    return Outcome{stats.temporal[0], correct, in_odd_blocks, visible};
+    return Outcome{stats.temporal[0], score.correct, in_odd_blocks, score.visible};
   };
   const auto none = [](int, int) { return std::optional<Eigen::Vector2f>(); };
   const FrontendConfig defaults;
