@@ -542,12 +542,7 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
   const int right_room = max_points_ - static_cast<int>(right.points.size());
   for (const Eigen::Vector2f& p : new_points_) {
     const std::uint64_t id = next_track_id_++;
-    const int left_slot = left.acquire();
-    buildPyramidPatch(left.cur(), p, *pattern_, left.slot(left_slot));
-    left.built_levels[static_cast<std::size_t>(left_slot)] = num_levels_;
-    left.ids.push_back(id);
-    left.points.push_back(p);
-    left.slots.push_back(left_slot);
+    const int left_slot = left.addDetected(id, p, *pattern_);
     if (stats.stereo_matched >= right_room) continue;
     Eigen::Vector2f guess = p;
     Eigen::Vector3d bearing;
@@ -579,12 +574,7 @@ void KltFrontend::detectRightOnly(const DecodedStereoFrame& input, FrontendStats
       detector_.detect(input.images[1].view(), right.points, right_detector_params_, room, new_points_, right_overlap_);
   // Ids are issued in increasing order, so the right list stays sorted for filterEpipolar's merge.
   for (const Eigen::Vector2f& p : new_points_) {
-    const int slot = right.acquire();
-    buildPyramidPatch(right.cur(), p, *pattern_, right.slot(slot));
-    right.built_levels[static_cast<std::size_t>(slot)] = num_levels_;
-    right.ids.push_back(next_track_id_++);
-    right.points.push_back(p);
-    right.slots.push_back(slot);
+    right.addDetected(next_track_id_++, p, *pattern_);
   }
 }
 

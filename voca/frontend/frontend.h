@@ -139,6 +139,17 @@ class KltFrontend {
       return index;
     }
     void release(int index) { free_slots.push_back(index); }
+    // Appends a point detected in cur() with the templates of every level in a fresh slot, and
+    // returns the slot.
+    int addDetected(std::uint64_t id, const Eigen::Vector2f& px, const PatchPattern& pattern) {
+      const int index = acquire();
+      buildPyramidPatch(cur(), px, pattern, slot(index));
+      built_levels[static_cast<std::size_t>(index)] = num_levels;
+      ids.push_back(id);
+      points.push_back(px);
+      slots.push_back(index);
+      return index;
+    }
     // The first `levels` templates of a slot, the missing ones built at px in `pyramid` first.
     std::span<const PatchTemplate> trackedTemplates(int index, const ImagePyramid& pyramid, const Eigen::Vector2f& px,
                                                     int levels, const PatchPattern& pattern) {
