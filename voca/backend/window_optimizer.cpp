@@ -352,10 +352,15 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
     }
     if (!accepted || converged) {
       if (!filtered) {
-        // Converged before the filter iteration: filter now and optimise the cleaned problem.
-        filterOutliers(state, outliers_ready ? outliers : nullptr);
+        // Converged before the filter iteration: filter now and optimise the cleaned problem. When the
+        // filter removed nothing, the problem is the one that just converged: done.
+        const int removed = filterOutliers(state, outliers_ready ? outliers : nullptr);
         filtered = true;
         linearized = false;
+        if (removed == 0) {
+          ++it;
+          break;
+        }
         continue;
       }
       ++it;
@@ -366,17 +371,19 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
   return it;
 }
 
-void WindowOptimizer::filterOutliers(const WindowState& state) const { filterOutliers(state, nullptr); }
+int WindowOptimizer::filterOutliers(const WindowState& state) const { return filterOutliers(state, nullptr); }
 
-[[gnu::flatten]] void WindowOptimizer::filterOutliers(const WindowState& state,
-                                                      const std::uint32_t* precomputed) const {
+[[gnu::flatten]] int WindowOptimizer::filterOutliers(const WindowState& state, const std::uint32_t* precomputed) const {
   LandmarkStore& landmarks = state.landmarks;
+  int removed = 0;
   const WindowPoses poses = model_.windowPoses(state.window);
   for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
     const int i = landmarks.alive()[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks[i];
     if (!lm.alive) continue;
+    const int observations = lm.numObs();
     if (!(lm.rho > 0.0 && lm.rho <= 2.0 * config_.max_inverse_distance) || !lm.s.allFinite()) {
+      removed += observations;
       landmarks.remove(i);
       continue;
     }
@@ -394,12 +401,15 @@ void WindowOptimizer::filterOutliers(const WindowState& state) const { filterOut
     }
     if (outliers == 0) continue;
     const bool host_outlier = (outliers & (1u << maskBit(lm.host, 0))) != 0;
-    if (host_outlier || lm.numObs() - std::popcount(outliers) < kFilterMinObservations) {
+    if (host_outlier || observations - std::popcount(outliers) < kFilterMinObservations) {
+      removed += observations;
       landmarks.remove(i);
     } else {
+      removed += std::popcount(outliers & lm.mask);
       lm.mask &= ~outliers;
     }
   }
+  return removed;
 }
 
 // ---- marginalisation ----------------------------------------------------------------------------

@@ -58,14 +58,15 @@ class WindowOptimizer {
   // Linearisations (passes over the residuals with Jacobians) of the last optimize(): most of its time.
   int linearizations() const { return linearizations_; }
   // Removes observations off by more than the outlier threshold; landmarks whose host view is an
-  // outlier, that keep too few views or whose depth left the valid range die.
-  void filterOutliers(const WindowState& state) const;
+  // outlier, that keep too few views or whose depth left the valid range die. Returns the number of
+  // observations removed (those of dead landmarks included).
+  int filterOutliers(const WindowState& state) const;
   // cost(), and with `outliers` (room for every live landmark) the filter's outlier bits of each
   // landmark by its position in alive(), from the same residuals: what optimize() does before its
   // filter, so that the filter needs no residual pass of its own.
   double cost(const WindowState& state, std::uint32_t* outliers) const;
   // filterOutliers, with the outlier bits from cost(state, outliers) at this same state when not null.
-  void filterOutliers(const WindowState& state, const std::uint32_t* outliers) const;
+  int filterOutliers(const WindowState& state, const std::uint32_t* outliers) const;
   // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed.
   void optimizePose(const WindowState& state, int frame) const;
 
