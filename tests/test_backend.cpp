@@ -476,10 +476,16 @@ TEST_CASE("backend: LM judges steps by the plain cost, and the window's cost nev
   CHECK(checked >= 8);
 }
 
-TEST_CASE("backend: a step that LM expects to converge is judged by a cost pass, not by a linearisation") {
-  // Converging early (here at a 0.1 % decrease), the loop ends or goes to the outlier filter after
-  // the step: a linearisation to judge it by would go unused. Each iteration then costs one
-  // linearisation; before, every early stop cost one more.
+namespace {
+
+// A 4 s sequence with 0.5 px noise (nothing beyond the 3 px outlier threshold) run with LM stopping at
+// a 0.1 % decrease: every frame's estimate, and the true poses.
+struct EarlyStoppingRun {
+  std::vector<PoseEstimate> estimates;
+  std::vector<SE3d> truth;
+  int max_iterations = 0;
+};
+EarlyStoppingRun runEarlyStopping() {
   const StereoRig rig = synth::eurocRig();
   SyntheticObservationsConfig sc;
   sc.noise_px = 0.5;
@@ -489,40 +495,43 @@ TEST_CASE("backend: a step that LM expects to converge is judged by a cost pass,
   BackendConfig config;
   config.converged_relative_decrease = 1e-3;
   VoEstimator estimator(config, rig);
-  int iterations = 0, linearizations = 0, early = 0;
+  EarlyStoppingRun run{{}, seq.T_world_body, config.max_iterations};
   for (const TrackedStereoFrame& frame : seq.frames) {
-    const PoseEstimate estimate = estimator.process(frame);
-    REQUIRE(estimate.state != TrackingState::kLost);
+    run.estimates.push_back(estimator.process(frame));
+    REQUIRE(run.estimates.back().state != TrackingState::kLost);
+  }
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("backend: a step that LM expects to converge is judged by a cost pass, not by a linearisation") {
+  // Converging early (here at a 0.1 % decrease), the loop ends or goes to the outlier filter after
+  // the step: a linearisation to judge it by would go unused. Each iteration then costs one
+  // linearisation; before, every early stop cost one more.
+  const EarlyStoppingRun run = runEarlyStopping();
+  int iterations = 0, linearizations = 0, early = 0;
+  for (const PoseEstimate& estimate : run.estimates) {
     iterations += estimate.lm_iterations;
     linearizations += estimate.lm_linearizations;
-    early += estimate.lm_iterations > 0 && estimate.lm_iterations < config.max_iterations;
+    early += estimate.lm_iterations > 0 && estimate.lm_iterations < run.max_iterations;
   }
-  MESSAGE(seq.frames.size() << " frames: " << iterations << " LM iterations, " << linearizations << " linearisations, "
-                            << early << " frames stopped early");
-  REQUIRE(early > static_cast<int>(seq.frames.size()) / 2);  // the case this is about
+  MESSAGE(run.estimates.size() << " frames: " << iterations << " LM iterations, " << linearizations
+                               << " linearisations, " << early << " frames stopped early");
+  REQUIRE(early > static_cast<int>(run.estimates.size()) / 2);  // the case this is about
   CHECK(linearizations <= iterations);
 }
 
 TEST_CASE("backend: an outlier filter that removes nothing ends the loop") {
   // Converging before filter_iteration, the loop runs the outlier filter and optimises the cleaned
-  // problem. On observations with 0.5 px noise nothing is beyond the 3 px threshold, so the problem
-  // after the filter is the one that just converged: optimising it again would spend a linearisation
-  // on nothing. Here the loop converges after its second step (one linearisation each; the step that
-  // converges is judged by a cost pass), so a frame takes two or three linearisations, not three or four.
-  const StereoRig rig = synth::eurocRig();
-  SyntheticObservationsConfig sc;
-  sc.noise_px = 0.5;
-  sc.seed = 3;
-  sc.duration_s = 4.0;
-  const SyntheticObservations seq = makeSyntheticObservations(rig, sc);
-  BackendConfig config;
-  config.converged_relative_decrease = 1e-3;
-  VoEstimator estimator(config, rig);
+  // problem. Here nothing is beyond the outlier threshold, so the problem after the filter is the one
+  // that just converged: optimising it again would spend a linearisation on nothing. The loop
+  // converges after its second step (one linearisation each; the step that converges is judged by a
+  // cost pass), so a frame takes two or three linearisations, not three or four.
+  const EarlyStoppingRun run = runEarlyStopping();
   int frames = 0, over_three = 0, linearizations = 0;
   std::vector<SE3d> poses;
-  for (const TrackedStereoFrame& frame : seq.frames) {
-    const PoseEstimate estimate = estimator.process(frame);
-    REQUIRE(estimate.state != TrackingState::kLost);
+  for (const PoseEstimate& estimate : run.estimates) {
     poses.push_back(estimate.T_world_body);
     if (estimate.lm_iterations == 0) continue;  // initialisation
     ++frames;
@@ -534,7 +543,7 @@ TEST_CASE("backend: an outlier filter that removes nothing ends the loop") {
   REQUIRE(frames > 50);
   CHECK(over_three * 10 < frames);
   CHECK(linearizations < 3 * frames);
-  const auto [max_t, max_r] = maxPoseError(poses, seq.T_world_body);
+  const auto [max_t, max_r] = maxPoseError(poses, run.truth);
   CHECK(max_t < 0.01);
   CHECK(max_r < 0.1);
 }
