@@ -548,6 +548,33 @@ TEST_CASE("backend: an outlier filter that removes nothing ends the loop") {
   CHECK(max_r < 0.1);
 }
 
+TEST_CASE("backend: the pose-only step ends once its step is below the convergence bound") {
+  // Its Huber reweighting converges about tenfold per step; the steps that used to follow moved the
+  // pose by micrometres, which the window optimisation after it refines anyway. Before the bound,
+  // every frame took all pose_only_iterations steps.
+  const EarlyStoppingRun run = runEarlyStopping();
+  const int limit = BackendConfig{}.pose_only_iterations;
+  int frames = 0, steps = 0, at_limit = 0;
+  std::vector<SE3d> poses;
+  for (const PoseEstimate& estimate : run.estimates) {
+    poses.push_back(estimate.T_world_body);
+    if (estimate.lm_iterations == 0) continue;  // initialisation
+    ++frames;
+    steps += estimate.pose_iterations;
+    at_limit += estimate.pose_iterations == limit;
+    REQUIRE(estimate.pose_iterations >= 1);
+    REQUIRE(estimate.pose_iterations <= limit);
+  }
+  MESSAGE(frames << " optimised frames: " << steps << " pose-only steps, " << at_limit << " frames at the limit of "
+                 << limit);
+  REQUIRE(frames > 50);
+  CHECK(at_limit * 10 < frames);
+  CHECK(steps < (limit - 1) * frames);
+  const auto [max_t, max_r] = maxPoseError(poses, run.truth);
+  CHECK(max_t < 0.01);
+  CHECK(max_r < 0.1);
+}
+
 TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
   const StereoRig rig = synth::eurocRig();
   const SyntheticObservations seq = shortNoiseFreeSequence(rig);

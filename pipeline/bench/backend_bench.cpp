@@ -48,7 +48,7 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
   timing.warmup = warmup;
   timing.cpu_ms.reserve(frames.size() - warmup);
   VoEstimator estimator(config, rig);
-  double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0;
+  double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0, pose_iterations = 0.0;
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const std::int64_t start = platform::threadCpuNs();
     const PoseEstimate& estimate = estimator.process(frames[k]);
@@ -62,6 +62,7 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
     inliers += estimate.num_inliers;
     iterations += estimate.lm_iterations;
     linearizations += estimate.lm_linearizations;
+    pose_iterations += estimate.pose_iterations;
     ++timing.measured;
   }
   const double n = static_cast<double>(timing.measured);
@@ -70,6 +71,7 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
   timing.mean_inliers = inliers / n;
   timing.mean_lm_iterations = iterations / n;
   timing.mean_linearizations = linearizations / n;
+  timing.mean_pose_iterations = pose_iterations / n;
   return timing;
 }
 

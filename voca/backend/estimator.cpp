@@ -361,7 +361,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
       previous_T_w_c_ * (intervals == 1 ? velocity_ : SE3d::exp(velocity_.log() * static_cast<double>(intervals)));
   const int n = window_.add(frame, predicted);
   landmarks_.attach(window_, n);
-  optimizer_.optimizePose(state(), n);
+  est.pose_iterations = optimizer_.optimizePose(state(), n);
   est.num_outliers = removeFrameOutliers(n);
 
   const auto fail = [&](FailureReason reason) -> const PoseEstimate& {

@@ -50,10 +50,11 @@ struct PoseEstimate {
   FailureReason failure = FailureReason::kNone;
   bool keyframe = false;
   int num_keyframes = 0;
-  int num_landmarks = 0;  // alive in the window
-  int num_inliers = 0;    // this frame's observations attached to landmarks after outlier removal
-  int num_outliers = 0;   // this frame's observations removed as outliers
-  int new_landmarks = 0;  // triangulated in this frame (keyframes only)
+  int num_landmarks = 0;    // alive in the window
+  int num_inliers = 0;      // this frame's observations attached to landmarks after outlier removal
+  int num_outliers = 0;     // this frame's observations removed as outliers
+  int new_landmarks = 0;    // triangulated in this frame (keyframes only)
+  int pose_iterations = 0;  // robust steps on this frame's pose alone, before the window
   int lm_iterations = 0;
   int lm_linearizations = 0;         // of the window, in those iterations
   double rms_reprojection_px = 0.0;  // this frame's inliers

@@ -67,8 +67,9 @@ class WindowOptimizer {
   double cost(const WindowState& state, std::uint32_t* outliers) const;
   // filterOutliers, with the outlier bits from cost(state, outliers) at this same state when not null.
   int filterOutliers(const WindowState& state, const std::uint32_t* outliers) const;
-  // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed.
-  void optimizePose(const WindowState& state, int frame) const;
+  // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed. Returns the steps
+  // taken (at most pose_only_iterations; fewer once a step is below the convergence bound).
+  int optimizePose(const WindowState& state, int frame) const;
 
   // Marginalisation: the normal equations of the prior and the given landmarks' residuals, with
   // those landmarks eliminated. The result stays in hessian() and gradient() for the prior.
