@@ -269,7 +269,7 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
     expected = H;
     expected.block<6, 6>(offset, offset).noalias() -= A * B.transpose();
     const WindowMatrix before = H;
-    backend::subtractLowerTriangle(A, B, offset, H);
+    backend::accumulateLowerTriangle<backend::Accumulate::kSubtract>(A, B, H.block<6, 6>(offset, offset));
     for (int c = 0; c < kWindowDim; ++c) {
       for (int r = 0; r < kWindowDim; ++r) {
         const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
@@ -281,6 +281,39 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
         } else if (!pair_upper) {
           REQUIRE(H(r, c) == before(r, c));
         }
+      }
+    }
+  }
+}
+
+TEST_CASE("backend: a pair's host information from lower triangles and one mirror equals the full sum") {
+  // linearize() forms J_host^T W J_host per residual in the lower triangle only and mirrors the sum
+  // once per frame pair. The lower triangle is the full product's bit for bit (same two products per
+  // entry, summed in the same order; see the Schur test for FMA builds), the upper half its mirror:
+  // exactly symmetric, where the full product's upper half rounds (w a) b instead of (w b) a.
+#if defined(__x86_64__) && !defined(__FMA__)
+  constexpr double kLowerTolerance = 0.0;
+#else
+  constexpr double kLowerTolerance = 1e-8;
+#endif
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> value(-1e3, 1e3), weight(0.05, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::Matrix<double, 6, 6> full = Eigen::Matrix<double, 6, 6>::Zero(), lower = full;
+    for (int residual = 0; residual < 1 + trial * 7; ++residual) {
+      Eigen::Matrix<double, 2, 6> J;
+      for (int k = 0; k < J.size(); ++k) J(k) = value(rng);
+      const Eigen::Matrix<double, 6, 2> JW = weight(rng) * J.transpose();
+      full.noalias() += JW * J;
+      backend::accumulateLowerTriangle<backend::Accumulate::kAdd>(JW, J.transpose(), lower);
+    }
+    backend::mirrorLowerTriangle(lower);
+    for (int c = 0; c < 6; ++c) {
+      for (int r = c; r < 6; ++r) {
+        REQUIRE(std::abs(lower(r, c) - full(r, c)) <= kLowerTolerance);
+        REQUIRE(lower(c, r) == lower(r, c));
+        // The full sum's upper half differs from its lower one by roundings only.
+        CHECK(std::abs(full(c, r) - lower(c, r)) <= 1e-12 * std::max(1.0, std::abs(full(r, c))) * (1 + trial * 7));
       }
     }
   }

@@ -168,7 +168,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
         pair.H.setZero();
         pair.b.setZero();
       }
-      pair.H.noalias() += JhW * J.d_host;
+      // Symmetric: only the lower triangle per residual, mirrored once per pair below.
+      accumulateLowerTriangle<Accumulate::kAdd>(JhW, J.d_host.transpose(), pair.H);
       pair.b.noalias() += JhW * r;
       if ((targets & target_bit) == 0) {
         targets |= target_bit;
@@ -200,7 +201,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
     const Eigen::Vector3d& t_host = poses[static_cast<std::size_t>(h)].T_w_c0.t;
     for (std::uint32_t m = targets_of_host_[static_cast<std::size_t>(h)]; m != 0; m &= m - 1) {
       const int t = std::countr_zero(m);
-      const PairLin& pair = pairs_[static_cast<std::size_t>(h * kMaxWindowFrames + t)];
+      PairLin& pair = pairs_[static_cast<std::size_t>(h * kMaxWindowFrames + t)];
+      mirrorLowerTriangle(pair.H);
       const Eigen::Vector3d dt = t_host - poses[static_cast<std::size_t>(t)].T_w_c0.t;
       const Matrix6d DtH = hostToTargetTransposed<6>(dt, pair.H);
       H.block<6, 6>(6 * h, 6 * h) += pair.H;
@@ -317,7 +319,8 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
             const int g = std::countr_zero(n);
             H_reduced_.block<6, 6>(6 * f, 6 * g).noalias() -= T[static_cast<std::size_t>(f)] * H_pl(L, g).transpose();
           }
-          subtractLowerTriangle(T[static_cast<std::size_t>(f)], H_pl(L, f), 6 * f, H_reduced_);
+          accumulateLowerTriangle<Accumulate::kSubtract>(T[static_cast<std::size_t>(f)], H_pl(L, f),
+                                                         H_reduced_.block<6, 6>(6 * f, 6 * f));
         }
       }
       for (int f = 0; f < kMaxWindowFrames; ++f) {

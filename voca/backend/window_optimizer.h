@@ -25,19 +25,36 @@ struct WindowState {
   MarginalizationPrior& prior;
 };
 
-// H(offset + i, offset + j) -= (A B^T)(i, j) for i >= j: the lower triangle of a diagonal block of the
-// reduced camera system, the only part its LDLT reads (the upper half was a third of the block
-// products formed per landmark). It goes in column pairs from the diagonal down, (0,1), (2,3), (4,5),
-// so every column is whole SSE2 packets of two rows; the pairs also reach the three entries just
-// above the diagonal (0,1), (2,3), (4,5), which are left changed and never read. Eigen's packet product
-// sums ((a0 b0 + a1 b1) + a2 b2) as the full block product does, so the entries are the same bit for bit.
-// Always inlined: GCC kept it as a call in the Schur loop, once per landmark and frame.
-[[gnu::always_inline]] inline void subtractLowerTriangle(const Eigen::Matrix<double, 6, 3>& A,
-                                                         const Eigen::Matrix<double, 6, 3>& B, int offset,
-                                                         WindowMatrix& H) {
-  H.block<6, 2>(offset, offset).noalias() -= A * B.topRows<2>().transpose();
-  H.block<4, 2>(offset + 2, offset + 2).noalias() -= A.bottomRows<4>() * B.middleRows<2>(2).transpose();
-  H.block<2, 2>(offset + 4, offset + 4).noalias() -= A.bottomRows<2>() * B.bottomRows<2>().transpose();
+// dst(i, j) += sign (A B^T)(i, j) for i >= j, dst a 6x6 block, A and B 6xK: the lower triangle of a
+// symmetric block. The diagonal blocks of the reduced camera system (whose LDLT reads nothing else;
+// the upper half was a third of the block products formed per landmark) and the host-host
+// information of a frame pair (mirrored once per pair, not formed per residual). It goes in column
+// pairs from the diagonal down, (0,1), (2,3), (4,5), so every column is whole SSE2 packets of two
+// rows; the pairs also reach the three entries just above the diagonal (0,1), (2,3), (4,5), which
+// are left changed. Eigen's packet product sums ((a0 b0 + a1 b1) + a2 b2) as the full block product
+// does, so the entries are the same bit for bit. Always inlined: GCC kept it as a call in the Schur
+// loop, once per landmark and frame.
+enum class Accumulate { kAdd, kSubtract };
+template <Accumulate kOp, typename DerivedA, typename DerivedB, typename Dst>
+[[gnu::always_inline]] inline void accumulateLowerTriangle(const Eigen::MatrixBase<DerivedA>& A,
+                                                           const Eigen::MatrixBase<DerivedB>& B, Dst&& dst) {
+  static_assert(DerivedA::RowsAtCompileTime == 6 && DerivedB::RowsAtCompileTime == 6);
+  if constexpr (kOp == Accumulate::kAdd) {
+    dst.template block<6, 2>(0, 0).noalias() += A * B.template topRows<2>().transpose();
+    dst.template block<4, 2>(2, 2).noalias() += A.template bottomRows<4>() * B.template middleRows<2>(2).transpose();
+    dst.template block<2, 2>(4, 4).noalias() += A.template bottomRows<2>() * B.template bottomRows<2>().transpose();
+  } else {
+    dst.template block<6, 2>(0, 0).noalias() -= A * B.template topRows<2>().transpose();
+    dst.template block<4, 2>(2, 2).noalias() -= A.template bottomRows<4>() * B.template middleRows<2>(2).transpose();
+    dst.template block<2, 2>(4, 4).noalias() -= A.template bottomRows<2>() * B.template bottomRows<2>().transpose();
+  }
+}
+
+// Copies the strict lower triangle of a 6x6 matrix onto its upper one.
+inline void mirrorLowerTriangle(Eigen::Matrix<double, 6, 6>& M) {
+  for (int c = 1; c < 6; ++c) {
+    for (int r = 0; r < c; ++r) M(r, c) = M(c, r);
+  }
 }
 
 class WindowOptimizer {
