@@ -539,6 +539,15 @@ EarlyStoppingRun runEarlyStopping() {
   return run;
 }
 
+// Stopping earlier must not cost accuracy: the estimates stay within 1 cm and 0.1 degree of the truth.
+void checkEarlyStoppingAccuracy(const EarlyStoppingRun& run) {
+  std::vector<SE3d> poses;
+  for (const PoseEstimate& estimate : run.estimates) poses.push_back(estimate.T_world_body);
+  const auto [max_t, max_r] = maxPoseError(poses, run.truth);
+  CHECK(max_t < 0.01);
+  CHECK(max_r < 0.1);
+}
+
 }  // namespace
 
 TEST_CASE("backend: a step that LM expects to converge is judged by a cost pass, not by a linearisation") {
@@ -566,9 +575,7 @@ TEST_CASE("backend: an outlier filter that removes nothing ends the loop") {
   // cost pass), so a frame takes two or three linearisations, not three or four.
   const EarlyStoppingRun run = runEarlyStopping();
   int frames = 0, over_three = 0, linearizations = 0;
-  std::vector<SE3d> poses;
   for (const PoseEstimate& estimate : run.estimates) {
-    poses.push_back(estimate.T_world_body);
     if (estimate.lm_iterations == 0) continue;  // initialisation
     ++frames;
     linearizations += estimate.lm_linearizations;
@@ -579,9 +586,7 @@ TEST_CASE("backend: an outlier filter that removes nothing ends the loop") {
   REQUIRE(frames > 50);
   CHECK(over_three * 10 < frames);
   CHECK(linearizations < 3 * frames);
-  const auto [max_t, max_r] = maxPoseError(poses, run.truth);
-  CHECK(max_t < 0.01);
-  CHECK(max_r < 0.1);
+  checkEarlyStoppingAccuracy(run);
 }
 
 TEST_CASE("backend: the pose-only step ends once its step is below the convergence bound") {
@@ -591,9 +596,7 @@ TEST_CASE("backend: the pose-only step ends once its step is below the convergen
   const EarlyStoppingRun run = runEarlyStopping();
   const int limit = BackendConfig{}.pose_only_iterations;
   int frames = 0, steps = 0, at_limit = 0;
-  std::vector<SE3d> poses;
   for (const PoseEstimate& estimate : run.estimates) {
-    poses.push_back(estimate.T_world_body);
     if (estimate.lm_iterations == 0) continue;  // initialisation
     ++frames;
     steps += estimate.pose_iterations;
@@ -606,9 +609,7 @@ TEST_CASE("backend: the pose-only step ends once its step is below the convergen
   REQUIRE(frames > 50);
   CHECK(at_limit * 10 < frames);
   CHECK(steps < (limit - 1) * frames);
-  const auto [max_t, max_r] = maxPoseError(poses, run.truth);
-  CHECK(max_t < 0.01);
-  CHECK(max_r < 0.1);
+  checkEarlyStoppingAccuracy(run);
 }
 
 TEST_CASE("backend: tracks seen only by the right camera become landmarks (the frontend's detection_nonoverlap)") {
