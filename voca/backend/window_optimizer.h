@@ -35,19 +35,21 @@ struct WindowState {
 // does, so the entries are the same bit for bit. Always inlined: GCC kept it as a call in the Schur
 // loop, once per landmark and frame.
 enum class Accumulate { kAdd, kSubtract };
+template <Accumulate kOp, typename Dst, typename Product>
+[[gnu::always_inline]] inline void accumulate(Dst&& dst, const Product& product) {
+  if constexpr (kOp == Accumulate::kAdd) {
+    dst.noalias() += product;
+  } else {
+    dst.noalias() -= product;
+  }
+}
 template <Accumulate kOp, typename DerivedA, typename DerivedB, typename Dst>
 [[gnu::always_inline]] inline void accumulateLowerTriangle(const Eigen::MatrixBase<DerivedA>& A,
                                                            const Eigen::MatrixBase<DerivedB>& B, Dst&& dst) {
   static_assert(DerivedA::RowsAtCompileTime == 6 && DerivedB::RowsAtCompileTime == 6);
-  if constexpr (kOp == Accumulate::kAdd) {
-    dst.template block<6, 2>(0, 0).noalias() += A * B.template topRows<2>().transpose();
-    dst.template block<4, 2>(2, 2).noalias() += A.template bottomRows<4>() * B.template middleRows<2>(2).transpose();
-    dst.template block<2, 2>(4, 4).noalias() += A.template bottomRows<2>() * B.template bottomRows<2>().transpose();
-  } else {
-    dst.template block<6, 2>(0, 0).noalias() -= A * B.template topRows<2>().transpose();
-    dst.template block<4, 2>(2, 2).noalias() -= A.template bottomRows<4>() * B.template middleRows<2>(2).transpose();
-    dst.template block<2, 2>(4, 4).noalias() -= A.template bottomRows<2>() * B.template bottomRows<2>().transpose();
-  }
+  accumulate<kOp>(dst.template block<6, 2>(0, 0), A * B.template topRows<2>().transpose());
+  accumulate<kOp>(dst.template block<4, 2>(2, 2), A.template bottomRows<4>() * B.template middleRows<2>(2).transpose());
+  accumulate<kOp>(dst.template block<2, 2>(4, 4), A.template bottomRows<2>() * B.template bottomRows<2>().transpose());
 }
 
 // Copies the strict lower triangle of a 6x6 matrix onto its upper one.
