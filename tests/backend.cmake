@@ -13,3 +13,4 @@ voca_add_test(test_backend_alloc SOURCES test_backend_alloc.cpp LIBS voca_backen
 voca_add_test(test_backend_e2e SOURCES test_backend_e2e.cpp LIBS voca_pipeline_vo voca_eval voca_formats_trajectory LABELS e2e
               TIMEOUT 900)
 add_dependencies(test_backend_e2e voca)
+voca_add_test(test_backend_bench SOURCES test_backend_bench.cpp LIBS voca_pipeline_bench voca_synth)

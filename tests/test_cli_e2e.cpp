@@ -176,12 +176,19 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   INFO("voca bench backend printed:\n" << backend.text);
   CHECK(backend.text.find("backend on the frontend's tracks (mv_parallel_of mode") != std::string::npos);
   CHECK(backend.text.find("measured frames 20 (after 10 warm-up)") != std::string::npos);
+  // Three runs by default: each frame's median, and each run's own median beside it.
+  CHECK(backend.text.find("CPU time per frame (each frame's median of 3 runs): median ") != std::string::npos);
+  CHECK(backend.text.find("each run's own median: ") != std::string::npos);
   CHECK(backend.text.find("target per stereo frame on one core: median <= 4 ms") != std::string::npos);
   // Fewer frames than the warm-up: a clear error, not a table of NaNs.
   const auto too_short = runVocaOutput("bench backend " + video.string() + " --calib " +
                                        (scratch / "odd_calib.json").string() + " --warmup 30");
   CHECK(too_short.exit_code != 0);
   CHECK(too_short.text.find("30 frames: the estimator needs more than the 30 warm-up frames") != std::string::npos);
+  const auto no_runs = runVocaOutput("bench backend " + video.string() + " --calib " +
+                                     (scratch / "odd_calib.json").string() + " --runs 0");
+  CHECK(no_runs.exit_code != 0);
+  CHECK(no_runs.text.find("--runs") != std::string::npos);
 
   // voca demo --reuse on this sequence: both VO variants side by side, trajectories and overlay.
   const auto demo_run = runVocaOutput("demo --out " + demo.string() + " --reuse");

@@ -6,6 +6,7 @@
 #include "platform/realtime/clock.h"
 #include "voca/backend/estimator.h"
 #include "voca/core/error.h"
+#include "voca/core/quantile.h"
 
 namespace voca::pipeline {
 
@@ -38,40 +39,94 @@ std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options) {
   return recording;
 }
 
-EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
-                              const BackendConfig& config, std::size_t warmup) {
-  if (frames.size() <= warmup) {
-    throw InputError(fmt::format("{} frames: the estimator needs more than the {} warm-up frames to be timed",
-                                 frames.size(), warmup));
-  }
-  EstimatorTiming timing;
-  timing.warmup = warmup;
-  timing.cpu_ms.reserve(frames.size() - warmup);
-  VoEstimator estimator(config, rig);
+namespace {
+
+// One run of a new estimator over the frames: the CPU time of every measured frame into cpu_ms, the
+// estimates' statistics into timing (counts and sums; the means are formed by the caller).
+struct RunStatistics {
+  int resets = 0, keyframes = 0;
   double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0, pose_iterations = 0.0;
+  bool operator==(const RunStatistics&) const = default;
+};
+
+RunStatistics runEstimatorOnce(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
+                               const BackendConfig& config, std::size_t warmup, std::vector<double>& cpu_ms) {
+  RunStatistics stats;
+  cpu_ms.clear();
+  VoEstimator estimator(config, rig);
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const std::int64_t start = platform::threadCpuNs();
     const PoseEstimate& estimate = estimator.process(frames[k]);
     const std::int64_t elapsed = platform::threadCpuNs() - start;
-    timing.resets += estimate.state != TrackingState::kTracking;
+    stats.resets += estimate.state != TrackingState::kTracking;
     if (k < warmup) continue;
-    timing.cpu_ms.push_back(1e-6 * static_cast<double>(elapsed));
-    timing.keyframes += estimate.keyframe;
-    window += estimate.num_keyframes;
-    points += static_cast<double>(frames[k].observations[0].size());
-    inliers += estimate.num_inliers;
-    iterations += estimate.lm_iterations;
-    linearizations += estimate.lm_linearizations;
-    pose_iterations += estimate.pose_iterations;
-    ++timing.measured;
+    cpu_ms.push_back(1e-6 * static_cast<double>(elapsed));
+    stats.keyframes += estimate.keyframe;
+    stats.window += estimate.num_keyframes;
+    stats.points += static_cast<double>(frames[k].observations[0].size());
+    stats.inliers += estimate.num_inliers;
+    stats.iterations += estimate.lm_iterations;
+    stats.linearizations += estimate.lm_linearizations;
+    stats.pose_iterations += estimate.pose_iterations;
   }
-  const double n = static_cast<double>(timing.measured);
-  timing.mean_window_keyframes = window / n;
-  timing.mean_left_points = points / n;
-  timing.mean_inliers = inliers / n;
-  timing.mean_lm_iterations = iterations / n;
-  timing.mean_linearizations = linearizations / n;
-  timing.mean_pose_iterations = pose_iterations / n;
+  return stats;
+}
+
+}  // namespace
+
+std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_ms) {
+  if (run_ms.empty()) throw InputError("per-frame median: no runs");
+  const std::size_t frames = run_ms.front().size();
+  for (const std::vector<double>& run : run_ms) {
+    if (run.size() != frames) {
+      throw InputError(fmt::format("per-frame median: a run of {} frames beside one of {}", run.size(), frames));
+    }
+  }
+  std::vector<double> medians(frames), frame_ms(run_ms.size());
+  for (std::size_t k = 0; k < frames; ++k) {
+    for (std::size_t run = 0; run < run_ms.size(); ++run) frame_ms[run] = run_ms[run][k];
+    medians[k] = quantileInPlace(frame_ms, 0.5);
+  }
+  return medians;
+}
+
+EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
+                              const BackendConfig& config, std::size_t warmup, int runs) {
+  if (frames.size() <= warmup) {
+    throw InputError(fmt::format("{} frames: the estimator needs more than the {} warm-up frames to be timed",
+                                 frames.size(), warmup));
+  }
+  if (runs < 1) throw InputError(fmt::format("{} runs: the estimator must be timed at least once", runs));
+  EstimatorTiming timing;
+  timing.warmup = warmup;
+  const std::size_t measured = frames.size() - warmup;
+  std::vector<std::vector<double>> run_ms(static_cast<std::size_t>(runs));
+  RunStatistics stats;
+  for (int run = 0; run < runs; ++run) {
+    std::vector<double>& ms = run_ms[static_cast<std::size_t>(run)];
+    ms.reserve(measured);
+    const RunStatistics this_run = runEstimatorOnce(frames, rig, config, warmup, ms);
+    if (run == 0) {
+      stats = this_run;
+    } else if (!(this_run == stats)) {
+      throw RuntimeFailure(
+          fmt::format("run {} of the estimator differs from the first (iterations, inliers or "
+                      "keyframes): it is not deterministic, so its runs cannot be compared",
+                      run + 1));
+    }
+    timing.run_median_ms.push_back(median(ms));
+  }
+  timing.cpu_ms = perFrameMedian(run_ms);
+  timing.measured = static_cast<int>(measured);
+  timing.resets = stats.resets;
+  timing.keyframes = stats.keyframes;
+  const double n = static_cast<double>(measured);
+  timing.mean_window_keyframes = stats.window / n;
+  timing.mean_left_points = stats.points / n;
+  timing.mean_inliers = stats.inliers / n;
+  timing.mean_lm_iterations = stats.iterations / n;
+  timing.mean_linearizations = stats.linearizations / n;
+  timing.mean_pose_iterations = stats.pose_iterations / n;
   return timing;
 }
 

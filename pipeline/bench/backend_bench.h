@@ -30,8 +30,11 @@ struct TrackRecording {
 std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options);
 
 struct EstimatorTiming {
-  std::vector<double> cpu_ms;  // per measured frame, thread CPU time of process()
-  std::size_t warmup = 0;      // frames before the first measured one (the window filling)
+  // Per measured frame, thread CPU time of process(): the median over the runs (the same work each
+  // time, so the median drops what another process on a shared machine added to one run).
+  std::vector<double> cpu_ms;
+  std::vector<double> run_median_ms;  // each run's own median over the frames, in run order
+  std::size_t warmup = 0;             // frames before the first measured one (the window filling)
   int measured = 0;
   int resets = 0;     // over all frames, warm-up included
   int keyframes = 0;  // measured frames that became keyframes
@@ -41,10 +44,16 @@ struct EstimatorTiming {
   double mean_lm_iterations = 0.0, mean_linearizations = 0.0, mean_pose_iterations = 0.0;
 };
 
+// Each frame's median over runs of the same frames (run_ms[run][frame]; every run as long as the
+// first). Throws InputError for no runs or runs of different lengths.
+std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_ms);
+
 // Feeds the frames to a new estimator in order and times each process() call; frames before
-// `warmup` (the window filling up) are run but not measured. Throws InputError when there are not
-// more frames than warmup.
+// `warmup` (the window filling up) are run but not measured. Does so `runs` times, each with a new
+// estimator. Throws InputError when there are not more frames than warmup or runs < 1, and
+// RuntimeFailure when a run does not repeat the first one's estimates (the timing would compare
+// different work).
 EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
-                              const BackendConfig& config, std::size_t warmup);
+                              const BackendConfig& config, std::size_t warmup, int runs = 1);
 
 }  // namespace voca::pipeline
