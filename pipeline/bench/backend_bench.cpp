@@ -41,8 +41,8 @@ std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options) {
 
 namespace {
 
-// One run of a new estimator over the frames: the CPU time of every measured frame into cpu_ms, the
-// estimates' statistics into timing (counts and sums; the means are formed by the caller).
+// One run of a new estimator over the frames: the CPU time of every measured frame into cpu_ms; returns
+// the estimates' counts and sums (the caller forms the means, and compares runs by them).
 struct RunStatistics {
   int resets = 0, keyframes = 0;
   double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0, pose_iterations = 0.0;
