@@ -186,9 +186,9 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   CHECK(too_short.exit_code != 0);
   CHECK(too_short.text.find("30 frames: the estimator needs more than the 30 warm-up frames") != std::string::npos);
   const auto no_runs = runVocaOutput("bench backend " + video.string() + " --calib " +
-                                     (scratch / "odd_calib.json").string() + " --runs 0");
+                                     (scratch / "odd_calib.json").string() + " --repeat 0");
   CHECK(no_runs.exit_code != 0);
-  CHECK(no_runs.text.find("--runs") != std::string::npos);
+  CHECK(no_runs.text.find("--repeat") != std::string::npos);
 
   // voca demo --reuse on this sequence: both VO variants side by side, trajectories and overlay.
   const auto demo_run = runVocaOutput("demo --out " + demo.string() + " --reuse");

@@ -91,18 +91,18 @@ std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_m
 }
 
 EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
-                              const BackendConfig& config, std::size_t warmup, int runs) {
+                              const BackendConfig& config, std::size_t warmup, int repeat) {
   if (frames.size() <= warmup) {
     throw InputError(fmt::format("{} frames: the estimator needs more than the {} warm-up frames to be timed",
                                  frames.size(), warmup));
   }
-  if (runs < 1) throw InputError(fmt::format("{} runs: the estimator must be timed at least once", runs));
+  if (repeat < 1) throw InputError(fmt::format("repeat {}: the estimator must be timed at least once", repeat));
   EstimatorTiming timing;
   timing.warmup = warmup;
   const std::size_t measured = frames.size() - warmup;
-  std::vector<std::vector<double>> run_ms(static_cast<std::size_t>(runs));
+  std::vector<std::vector<double>> run_ms(static_cast<std::size_t>(repeat));
   RunStatistics stats;
-  for (int run = 0; run < runs; ++run) {
+  for (int run = 0; run < repeat; ++run) {
     std::vector<double>& ms = run_ms[static_cast<std::size_t>(run)];
     ms.reserve(measured);
     const RunStatistics this_run = runEstimatorOnce(frames, rig, config, warmup, ms);

@@ -49,11 +49,11 @@ struct EstimatorTiming {
 std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_ms);
 
 // Feeds the frames to a new estimator in order and times each process() call; frames before
-// `warmup` (the window filling up) are run but not measured. Does so `runs` times, each with a new
-// estimator. Throws InputError when there are not more frames than warmup or runs < 1, and
+// `warmup` (the window filling up) are run but not measured. Does so `repeat` times, each with a new
+// estimator. Throws InputError when there are not more frames than warmup or repeat < 1, and
 // RuntimeFailure when a run does not repeat the first one's estimates (the timing would compare
 // different work).
 EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
-                              const BackendConfig& config, std::size_t warmup, int runs = 1);
+                              const BackendConfig& config, std::size_t warmup, int repeat = 1);
 
 }  // namespace voca::pipeline

@@ -34,7 +34,7 @@ struct BackendBenchOptions {
   std::string calib, config, mode{priorModeName(PriorMode::kMvParallelOf)};
   int frames = 0;
   int warmup = 40;
-  int runs = 3;
+  int repeat = 3;  // --repeat, as in the other benches
   bool synthetic = false;
   // --synthetic
   double seconds = 60.0;
@@ -80,7 +80,7 @@ int runSyntheticBench(const BackendBenchOptions& opts) {
   fmt::print(
       "backend on synthetic observations ({} rig, {:.0f} s at 20 fps, {:.2f} px noise, motion x{:.1f}), one thread\n",
       opts.rig, opts.seconds, opts.noise_px, opts.motion);
-  printTiming(pipeline::timeEstimator(seq.frames, *rig, config, static_cast<std::size_t>(opts.warmup), opts.runs));
+  printTiming(pipeline::timeEstimator(seq.frames, *rig, config, static_cast<std::size_t>(opts.warmup), opts.repeat));
   return 0;
 }
 
@@ -113,7 +113,7 @@ int runTrackBench(const BackendBenchOptions& opts) {
   fmt::print("backend on the frontend's tracks ({} mode, config {}), one thread: {}\n", opts.mode,
              run.config ? run.config->string() : "euroc", description);
   printTiming(pipeline::timeEstimator(recording->frames, recording->rig, recording->config.backend,
-                                      static_cast<std::size_t>(opts.warmup), opts.runs));
+                                      static_cast<std::size_t>(opts.warmup), opts.repeat));
   return 0;
 }
 
@@ -135,7 +135,7 @@ Runner configureBackendBench(CLI::App& app) {
                  "Frames run but not timed first: the window filling up to its number of keyframes")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--runs", opts->runs,
+  app.add_option("--repeat", opts->repeat,
                  "Times the estimator is run over the same observations; each frame's time is the median of its "
                  "runs (the same work each time: what a busy machine adds to one run drops out)")
       ->capture_default_str()
@@ -155,7 +155,7 @@ Runner configureBackendBench(CLI::App& app) {
       "By default the frontend runs once over a moving synthetic sequence (voca synth --motion aggressive\n"
       "--seconds 40, encoded at 500 kbit/s, generated on first use and cached), every frame's tracks are\n"
       "kept, and the estimator alone is then timed on them: exactly the observations the pipeline feeds\n"
-      "it. The first --warmup frames fill the window and are not measured. The estimator runs --runs\n"
+      "it. The first --warmup frames fill the window and are not measured. The estimator runs --repeat\n"
       "times over the same observations (it is deterministic: a run that differs is an error); each\n"
       "frame's time is the median of its runs, and each run's own median is printed beside it.\n"
       "--synthetic instead generates observations of points in a room along a smooth trajectory\n"
