@@ -114,6 +114,18 @@ double WindowOptimizer::cost(const WindowState& state) const { return cost(state
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
+namespace {
+
+// One residual of a landmark as linearize() computes it before summing.
+struct ObservationLin {
+  Eigen::Vector2d r;
+  ReprojectionJacobians J;
+  int target = 0;
+  bool projected = false;
+};
+
+}  // namespace
+
 [[gnu::flatten]] double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks,
                                                    bool full_hessian) {
   WindowMatrix& H = H_;
@@ -140,15 +152,27 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
     // own times D^T (see hostToTargetTransposed; once per landmark and target, not per residual).
     std::array<Mat63, kMaxWindowFrames> host_pl;
     std::uint32_t targets = 0;
+    // Every residual of the landmark first, then their sums in the same order: the projections are
+    // independent of each other, and without the accumulation between them the CPU overlaps their
+    // long dependency chains (divisions, the angle's rational function).
+    std::array<ObservationLin, 2 * kMaxWindowFrames> observations;
+    int count = 0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
       const int bit = std::countr_zero(m);
       const int t = bit / 2;
-      Eigen::Vector2d r;
-      ReprojectionJacobians J;
+      ObservationLin& o = observations[static_cast<std::size_t>(count++)];
+      o.target = t;
       // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian. Elsewhere only
       // the host's: the target's is the host's times D, applied per frame pair below.
-      if (!model_.residual(poses, bearing, lm, t, bit % 2, r, &J,
-                           t != h ? PoseJacobians::kHost : PoseJacobians::kNone)) {
+      o.projected = model_.residual(poses, bearing, lm, t, bit % 2, o.r, &o.J,
+                                    t != h ? PoseJacobians::kHost : PoseJacobians::kNone);
+    }
+    for (int i = 0; i < count; ++i) {
+      const ObservationLin& o = observations[static_cast<std::size_t>(i)];
+      const int t = o.target;
+      const Eigen::Vector2d& r = o.r;
+      const ReprojectionJacobians& J = o.J;
+      if (!o.projected) {
         L.cost += residualCost(false, 0.0);
         continue;
       }
