@@ -257,6 +257,49 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
   CHECK(checked > 100);
 }
 
+TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's, bit for bit") {
+  // WindowOptimizer::optimizePose asks for kTargetOnly with a bearing built without its derivative:
+  // the residual and d_target must be exactly those of kHostAndTarget with the full bearing, in
+  // other frames and in the landmark's own frame (which then takes the general model too).
+  std::mt19937 rng(29);
+  const StereoRig euroc = synth::eurocRig();
+  const StereoRig tumvi = synth::tumviRig();
+  int checked = 0;
+  for (const StereoRig* rig : {&euroc, &tumvi}) {
+    for (int cam = 0; cam < 2; ++cam) {
+      const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
+      const PoseMatrices cam0_cam(cam == 0 ? SE3d() : rig->T_cam0_cam1());
+      const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
+      for (int trial = 0; trial < 40; ++trial) {
+        const auto [T_w_h, T_w_t, s, rho] = randomViewConfig(rng, trial);
+        const PoseMatrices host(T_w_h);
+        for (const SE3d& T_w_target : {T_w_t, T_w_h}) {
+          const PoseMatrices target(T_w_target);
+          const Eigen::Matrix3d R_cam_w = cam0_cam.R_inv * target.R_inv;
+          const TargetCamera view{R_cam_w, target.t, offset};
+          Eigen::Vector2d uv_full, uv_target;
+          ReprojectionJacobians J_full, J_target;
+          J_target.d_host.setConstant(7.0);
+          J_target.d_landmark.setConstant(7.0);
+          const bool full = reprojectLandmark(camera, host.t, HostBearing(host, s, true), view, rho, uv_full, &J_full,
+                                              PoseJacobians::kHostAndTarget);
+          const bool only = reprojectLandmark(camera, host.t, HostBearing(host, s, false), view, rho, uv_target,
+                                              &J_target, PoseJacobians::kTargetOnly);
+          REQUIRE(full == only);
+          if (!full) continue;
+          CHECK(uv_target == uv_full);
+          CHECK(J_target.d_target == J_full.d_target);
+          // Nothing else is written.
+          CHECK((J_target.d_host.array() == 7.0).all());
+          CHECK((J_target.d_landmark.array() == 7.0).all());
+          ++checked;
+        }
+      }
+    }
+  }
+  CHECK(checked > 200);
+}
+
 TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there") {
   using backend::kWindowDim, backend::WindowMatrix;
   // Bit for bit on x86-64 without FMA (the shipped build: the reduced system does not change by a

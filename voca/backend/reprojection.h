@@ -109,14 +109,15 @@ Eigen::Matrix<double, 3, Cols> hatTimes(const Eigen::Vector3d& w, const Eigen::M
 
 // Which pose Jacobians reprojectLandmark fills: none (a residual in its host frame, whose relative
 // pose is the fixed extrinsic), the host's only (the window's linearisation derives the target's
-// from it, see WindowOptimizer::linearize), or both.
-enum class PoseJacobians { kNone, kHost, kHostAndTarget };
+// from it, see WindowOptimizer::linearize), both, or the target's alone without the landmark's (the
+// pose-only step, which moves nothing else).
+enum class PoseJacobians { kNone, kHost, kHostAndTarget, kTargetOnly };
 
 // Projects the landmark (bearing from HostBearing, built from the host's pose, and inverse distance
 // rho in the host frame's cam0, whose origin is t_w_host) into a camera of a target frame. Works in
 // homogeneous coordinates scaled by rho, so a point at infinity (rho = 0) is fine. Returns false
-// when the camera model cannot project it. jacobians->d_landmark is always set when jacobians are
-// asked for, the pose blocks as `poses` says.
+// when the camera model cannot project it. jacobians->d_landmark is set when jacobians are asked
+// for (except with kTargetOnly), the pose blocks as `poses` says.
 inline bool reprojectLandmark(const GenericCamera<double>& camera, const Eigen::Vector3d& t_w_host,
                               const HostBearing& bearing, const TargetCamera& target, double rho, Eigen::Vector2d& uv,
                               ReprojectionJacobians* jacobians = nullptr,
@@ -130,15 +131,16 @@ inline bool reprojectLandmark(const GenericCamera<double>& camera, const Eigen::
   if (!camera.project(p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
   if (jacobians != nullptr) {
     const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_p * target.R_cam_w;
-    if (poses != PoseJacobians::kNone) {
+    if (poses == PoseJacobians::kHost || poses == PoseJacobians::kHostAndTarget) {
       jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
       jacobians->d_host.rightCols<3>() = -timesHat(d_uv_d_v, Rb_w);
     }
-    if (poses == PoseJacobians::kHostAndTarget) {
+    if (poses == PoseJacobians::kHostAndTarget || poses == PoseJacobians::kTargetOnly) {
       jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
       // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
       jacobians->d_target.rightCols<3>() = timesHat(d_uv_d_v, v_w);
     }
+    if (poses == PoseJacobians::kTargetOnly) return true;
     jacobians->d_landmark.leftCols<2>() = d_uv_d_v * bearing.d_Rb_d_s;
     jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_p * target.offset_cam;
   }

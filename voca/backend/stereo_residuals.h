@@ -36,14 +36,16 @@ class StereoResiduals {
   // windowPoses() (still current) and the landmark's HostBearing, built from poses[lm.host]
   // (with_jacobian when jac is asked for): what a pass over all of a landmark's residuals computes once. In the host
   // frame no pose Jacobian is set (its relative pose is the fixed extrinsic) unless Jacobians are asked for with
-  // kHostAndTarget; the residual itself is the same whether Jacobians are asked for or not.
+  // kHostAndTarget or kTargetOnly; the residual itself is the same whether Jacobians are asked for or not.
   bool residual(const WindowPoses& poses, const HostBearing& bearing, const Landmark& lm, int frame, int cam,
                 Eigen::Vector2d& r, ReprojectionJacobians* jac,
                 PoseJacobians pose_jacobians = PoseJacobians::kHostAndTarget) const {
     Eigen::Vector2d uv;
     const auto c = static_cast<std::size_t>(cam);
     const auto f = static_cast<std::size_t>(frame);
-    if (frame == lm.host && (jac == nullptr || pose_jacobians != PoseJacobians::kHostAndTarget)) {
+    const bool target_jacobian =
+        pose_jacobians == PoseJacobians::kHostAndTarget || pose_jacobians == PoseJacobians::kTargetOnly;
+    if (frame == lm.host && (jac == nullptr || !target_jacobian)) {
       if (!reprojectInHost(cameras_[c], cam0_cam_[c].R_inv, offset_cam_[c], cam == 0, bearing, lm.rho, uv,
                            jac != nullptr ? &jac->d_landmark : nullptr)) {
         return false;

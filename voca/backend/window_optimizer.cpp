@@ -47,12 +47,13 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
     for (int k = static_cast<int>(landmarks.alive().size()) - 1; k >= 0; --k) {
       const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
       if (!lm.alive || (lm.mask & bits) == 0) continue;
-      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, true);
+      // Only the frame's pose moves: no landmark Jacobian, so no bearing derivative either.
+      const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
       for (int c = 0; c < 2; ++c) {
         if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
         Eigen::Vector2d r;
         ReprojectionJacobians J;
-        if (!model_.residual(poses, bearing, lm, frame, c, r, &J)) continue;
+        if (!model_.residual(poses, bearing, lm, frame, c, r, &J, PoseJacobians::kTargetOnly)) continue;
         // Huber weights here too (Basalt's pose step ignores them, so one bad track can drag it).
         const double w = model_.weight(r.norm());
         H.noalias() += w * J.d_target.transpose() * J.d_target;
