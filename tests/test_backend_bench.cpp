@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pipeline/bench/backend_bench.h"
+#include "pipeline/bench/per_frame_median.h"
 #include "voca/backend/synthetic.h"
 #include "voca/core/error.h"
 #include "voca/synth/rigs.h"

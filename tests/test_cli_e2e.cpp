@@ -158,16 +158,24 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   const std::string verdict = stereo_bench.text.substr(stereo_bench.text.find("median: ", target) + 8, 3);
   CHECK((verdict == "met" || verdict == "mis"));
 
-  // voca bench frontend: a row per mode (comma-separated list) with the target verdict.
+  // voca bench frontend: a row per mode (comma-separated list) with the target verdict, and with two
+  // runs each run's own median below its row.
   const auto frontend =
       runVocaOutput("bench frontend " + video.string() + " --calib " + (scratch / "odd_calib.json").string() +
-                    " --repeat 1 --modes none,mv_parallel_of");
+                    " --repeat 2 --modes none,mv_parallel_of");
   requireSuccess(frontend, "voca bench frontend");
   INFO("voca bench frontend printed:\n" << frontend.text);
   CHECK(frontend.text.find("\nnone ") != std::string::npos);
   CHECK(frontend.text.find("\nmv_parallel_of ") != std::string::npos);
   CHECK(frontend.text.find("\nmv ") == std::string::npos);
+  const std::size_t run_medians = frontend.text.find("\n  each run's own median: ");
+  REQUIRE(run_medians != std::string::npos);
+  CHECK(frontend.text.find(", ", run_medians) < frontend.text.find(" ms\n", run_medians));
   CHECK(frontend.text.find("target per stereo frame on one core, every mode: median <= 4 ms") != std::string::npos);
+  const auto frontend_no_runs = runVocaOutput("bench frontend " + video.string() + " --calib " +
+                                              (scratch / "odd_calib.json").string() + " --repeat 0");
+  CHECK(frontend_no_runs.exit_code != 0);
+  CHECK(frontend_no_runs.text.find("--repeat: Value 0 not in range 1 to 100") != std::string::npos);
 
   // voca bench backend: the estimator timed alone on the frontend's real tracks of this video.
   const auto backend = runVocaOutput("bench backend " + video.string() + " --calib " +

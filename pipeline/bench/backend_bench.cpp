@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include "pipeline/bench/per_frame_median.h"
 #include "pipeline/sinks/sink_stage.h"
 #include "platform/realtime/clock.h"
 #include "voca/backend/estimator.h"
@@ -73,22 +74,6 @@ RunStatistics runEstimatorOnce(const std::vector<TrackedStereoFrame>& frames, co
 }
 
 }  // namespace
-
-std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_ms) {
-  if (run_ms.empty()) throw InputError("per-frame median: no runs");
-  const std::size_t frames = run_ms.front().size();
-  for (const std::vector<double>& run : run_ms) {
-    if (run.size() != frames) {
-      throw InputError(fmt::format("per-frame median: a run of {} frames beside one of {}", run.size(), frames));
-    }
-  }
-  std::vector<double> medians(frames), frame_ms(run_ms.size());
-  for (std::size_t k = 0; k < frames; ++k) {
-    for (std::size_t run = 0; run < run_ms.size(); ++run) frame_ms[run] = run_ms[run][k];
-    medians[k] = quantileInPlace(frame_ms, 0.5);
-  }
-  return medians;
-}
 
 EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, const StereoRig& rig,
                               const BackendConfig& config, std::size_t warmup, int repeat) {

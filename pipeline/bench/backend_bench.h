@@ -30,8 +30,7 @@ struct TrackRecording {
 std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options);
 
 struct EstimatorTiming {
-  // Per measured frame, thread CPU time of process(): the median over the runs (the same work each
-  // time, so the median drops what another process on a shared machine added to one run).
+  // Per measured frame, thread CPU time of process(): the median over the runs (perFrameMedian).
   std::vector<double> cpu_ms;
   std::vector<double> run_median_ms;  // each run's own median over the frames, in run order
   std::size_t warmup = 0;             // frames before the first measured one (the window filling)
@@ -43,10 +42,6 @@ struct EstimatorTiming {
   // the noise a shared machine puts on the clock.
   double mean_lm_iterations = 0.0, mean_linearizations = 0.0, mean_pose_iterations = 0.0;
 };
-
-// Each frame's median over runs of the same frames (run_ms[run][frame]; every run as long as the
-// first). Throws InputError for no runs or runs of different lengths.
-std::vector<double> perFrameMedian(const std::vector<std::vector<double>>& run_ms);
 
 // Feeds the frames to a new estimator in order and times each process() call; frames before
 // `warmup` (the window filling up) are run but not measured. Does so `repeat` times, each with a new
