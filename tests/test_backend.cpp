@@ -58,6 +58,22 @@ ViewConfig randomViewConfig(std::mt19937& rng, int trial) {
   return v;
 }
 
+// Calls check(camera, cam, T_cam0_cam, view) for 40 random views in each camera (cam 0 or 1) of the
+// EuRoC (pinhole) and TUM-VI (fisheye) rigs.
+template <typename Check>
+void forEachRigCameraView(unsigned seed, Check&& check) {
+  std::mt19937 rng(seed);
+  const StereoRig euroc = synth::eurocRig();
+  const StereoRig tumvi = synth::tumviRig();
+  for (const StereoRig* rig : {&euroc, &tumvi}) {
+    for (int cam = 0; cam < 2; ++cam) {
+      const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
+      const SE3d T_cam0_cam = cam == 0 ? SE3d() : rig->T_cam0_cam1();
+      for (int trial = 0; trial < 40; ++trial) check(camera, cam, T_cam0_cam, randomViewConfig(rng, trial));
+    }
+  }
+}
+
 // Runs the estimator over a synthetic sequence; returns the body poses it output.
 struct RunResult {
   std::vector<SE3d> T_world_body;
@@ -210,19 +226,13 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
   // WindowOptimizer::linearize sums J_host^T W J_host per frame pair and maps it to the target's
   // blocks with D (hostToTargetTransposed, timesHostToTarget); the landmark's own frame takes
   // reprojectInHost. Both must agree with the full model.
-  std::mt19937 rng(13);
-  const StereoRig euroc = synth::eurocRig();
-  const StereoRig tumvi = synth::tumviRig();
   int checked = 0;
-  for (const StereoRig* rig : {&euroc, &tumvi}) {
-    for (int cam = 0; cam < 2; ++cam) {
-      const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
-      const SE3d T_cam0_cam = cam == 0 ? SE3d() : rig->T_cam0_cam1();
-      for (int trial = 0; trial < 40; ++trial) {
-        const auto [T_w_h, T_w_t, s, rho] = randomViewConfig(rng, trial);
+  forEachRigCameraView(
+      13, [&](const GenericCamera<double>& camera, int cam, const SE3d& T_cam0_cam, const ViewConfig& view) {
+        const auto [T_w_h, T_w_t, s, rho] = view;
         Eigen::Vector2d uv;
         ReprojectionJacobians J;
-        if (!reprojectLandmark(camera, T_w_h, T_w_t, T_cam0_cam, s, rho, uv, &J)) continue;
+        if (!reprojectLandmark(camera, T_w_h, T_w_t, T_cam0_cam, s, rho, uv, &J)) return;
         const Eigen::Vector3d dt = T_w_h.translation() - T_w_t.translation();
         // Sums of products of O(1e3) entries: rounding ~1e-12 relative.
         const double scale = std::max(1.0, J.d_host.norm() * J.d_host.norm());
@@ -241,7 +251,7 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
         // target = host, value and landmark Jacobian.
         Eigen::Vector2d uv_full, uv_host;
         ReprojectionJacobians J_full;
-        if (!reprojectLandmark(camera, T_w_h, T_w_h, T_cam0_cam, s, rho, uv_full, &J_full)) continue;
+        if (!reprojectLandmark(camera, T_w_h, T_w_h, T_cam0_cam, s, rho, uv_full, &J_full)) return;
         const PoseMatrices host(T_w_h), cam0_cam(T_cam0_cam);
         const HostBearing bearing(host, s, true);
         const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
@@ -251,9 +261,7 @@ TEST_CASE("backend: the target Jacobian is the host's times D, and host-frame re
         CHECK((uv_host - uv_full).norm() <= 1e-9);
         CHECK((d_landmark - J_full.d_landmark).norm() <= 1e-8 * std::max(1.0, J_full.d_landmark.norm()));
         ++checked;
-      }
-    }
-  }
+      });
   CHECK(checked > 100);
 }
 
@@ -261,30 +269,25 @@ TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's
   // WindowOptimizer::optimizePose asks for kTargetOnly with a bearing built without its derivative:
   // the residual and d_target must be exactly those of kHostAndTarget with the full bearing, in
   // other frames and in the landmark's own frame (which then takes the general model too).
-  std::mt19937 rng(29);
-  const StereoRig euroc = synth::eurocRig();
-  const StereoRig tumvi = synth::tumviRig();
   int checked = 0;
-  for (const StereoRig* rig : {&euroc, &tumvi}) {
-    for (int cam = 0; cam < 2; ++cam) {
-      const GenericCamera<double>& camera = rig->cameras[static_cast<std::size_t>(cam)].camera;
-      const PoseMatrices cam0_cam(cam == 0 ? SE3d() : rig->T_cam0_cam1());
-      const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
-      for (int trial = 0; trial < 40; ++trial) {
-        const auto [T_w_h, T_w_t, s, rho] = randomViewConfig(rng, trial);
+  forEachRigCameraView(
+      29, [&](const GenericCamera<double>& camera, int, const SE3d& T_cam0_cam, const ViewConfig& view) {
+        const auto [T_w_h, T_w_t, s, rho] = view;
+        const PoseMatrices cam0_cam(T_cam0_cam);
+        const Eigen::Vector3d offset = cam0_cam.R_inv * cam0_cam.t;
         const PoseMatrices host(T_w_h);
         for (const SE3d& T_w_target : {T_w_t, T_w_h}) {
           const PoseMatrices target(T_w_target);
           const Eigen::Matrix3d R_cam_w = cam0_cam.R_inv * target.R_inv;
-          const TargetCamera view{R_cam_w, target.t, offset};
+          const TargetCamera target_camera{R_cam_w, target.t, offset};
           Eigen::Vector2d uv_full, uv_target;
           ReprojectionJacobians J_full, J_target;
           J_target.d_host.setConstant(7.0);
           J_target.d_landmark.setConstant(7.0);
-          const bool full = reprojectLandmark(camera, host.t, HostBearing(host, s, true), view, rho, uv_full, &J_full,
-                                              PoseJacobians::kHostAndTarget);
-          const bool only = reprojectLandmark(camera, host.t, HostBearing(host, s, false), view, rho, uv_target,
-                                              &J_target, PoseJacobians::kTargetOnly);
+          const bool full = reprojectLandmark(camera, host.t, HostBearing(host, s, true), target_camera, rho, uv_full,
+                                              &J_full, PoseJacobians::kHostAndTarget);
+          const bool only = reprojectLandmark(camera, host.t, HostBearing(host, s, false), target_camera, rho,
+                                              uv_target, &J_target, PoseJacobians::kTargetOnly);
           REQUIRE(full == only);
           if (!full) continue;
           CHECK(uv_target == uv_full);
@@ -294,9 +297,7 @@ TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's
           CHECK((J_target.d_landmark.array() == 7.0).all());
           ++checked;
         }
-      }
-    }
-  }
+      });
   CHECK(checked > 200);
 }
 
