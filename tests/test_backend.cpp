@@ -301,6 +301,38 @@ TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's
   CHECK(checked > 200);
 }
 
+TEST_CASE("backend: the Schur loop's off-diagonal block update equals Eigen's block product") {
+  using backend::kWindowDim, backend::WindowMatrix;
+  // subtractProductTransposed takes AVX registers where the CPU has them: bit for bit on x86-64
+  // without FMA (the shipped build), a few units in the last place with FMA (productTolerance).
+  constexpr double kTolerance = productTolerance(1e-8);
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> value(-1e3, 1e3);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Matrix<double, 6, 3> A, B;
+    for (int k = 0; k < 18; ++k) {
+      A(k) = value(rng);
+      B(k) = value(rng);
+    }
+    const int row = 6 * (trial % kMaxWindowFrames), col = 6 * ((trial * 3 + 1) % kMaxWindowFrames);
+    WindowMatrix H, expected;
+    for (int k = 0; k < H.size(); ++k) H(k) = value(rng);
+    expected = H;
+    expected.block<6, 6>(row, col).noalias() -= A * B.transpose();
+    backend::subtractProductTransposed(A, B, &H(row, col), H.outerStride());
+    for (int c = 0; c < kWindowDim; ++c) {
+      for (int r = 0; r < kWindowDim; ++r) {
+        const bool in_block = r >= row && r < row + 6 && c >= col && c < col + 6;
+        if (in_block) {
+          REQUIRE(std::abs(H(r, c) - expected(r, c)) <= kTolerance);
+        } else {
+          REQUIRE(H(r, c) == expected(r, c));
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there") {
   using backend::kWindowDim, backend::WindowMatrix;
   // Bit for bit on x86-64 without FMA (the shipped build: the reduced system does not change by a
