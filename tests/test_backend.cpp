@@ -301,32 +301,46 @@ TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's
   CHECK(checked > 200);
 }
 
+namespace {
+
+// A Schur-loop block update on random values: A and B 6x3, the window matrix H, and the block at
+// (row, col) that update(A, B, H) changes; `expected` is H with Eigen's full product subtracted there.
+struct BlockUpdateCase {
+  Eigen::Matrix<double, 6, 3> A, B;
+  backend::WindowMatrix H, expected;
+};
+BlockUpdateCase randomBlockUpdateCase(std::mt19937& rng, int row, int col) {
+  std::uniform_real_distribution<double> value(-1e3, 1e3);
+  BlockUpdateCase c;
+  for (int k = 0; k < 18; ++k) {
+    c.A(k) = value(rng);
+    c.B(k) = value(rng);
+  }
+  for (int k = 0; k < c.H.size(); ++k) c.H(k) = value(rng);
+  c.expected = c.H;
+  c.expected.block<6, 6>(row, col).noalias() -= c.A * c.B.transpose();
+  return c;
+}
+
+}  // namespace
+
 TEST_CASE("backend: the Schur loop's off-diagonal block update equals Eigen's block product") {
-  using backend::kWindowDim, backend::WindowMatrix;
+  using backend::kWindowDim;
   // subtractProductTransposed takes AVX registers where the CPU has them: bit for bit on x86-64
   // without FMA (the shipped build), a few units in the last place with FMA (productTolerance).
   constexpr double kTolerance = productTolerance(1e-8);
   std::mt19937 rng(16);
-  std::uniform_real_distribution<double> value(-1e3, 1e3);
   for (int trial = 0; trial < 50; ++trial) {
-    Eigen::Matrix<double, 6, 3> A, B;
-    for (int k = 0; k < 18; ++k) {
-      A(k) = value(rng);
-      B(k) = value(rng);
-    }
     const int row = 6 * (trial % kMaxWindowFrames), col = 6 * ((trial * 3 + 1) % kMaxWindowFrames);
-    WindowMatrix H, expected;
-    for (int k = 0; k < H.size(); ++k) H(k) = value(rng);
-    expected = H;
-    expected.block<6, 6>(row, col).noalias() -= A * B.transpose();
-    backend::subtractProductTransposed(A, B, &H(row, col), H.outerStride());
+    BlockUpdateCase u = randomBlockUpdateCase(rng, row, col);
+    backend::subtractProductTransposed(u.A, u.B, &u.H(row, col), u.H.outerStride());
     for (int c = 0; c < kWindowDim; ++c) {
       for (int r = 0; r < kWindowDim; ++r) {
         const bool in_block = r >= row && r < row + 6 && c >= col && c < col + 6;
         if (in_block) {
-          REQUIRE(std::abs(H(r, c) - expected(r, c)) <= kTolerance);
+          REQUIRE(std::abs(u.H(r, c) - u.expected(r, c)) <= kTolerance);
         } else {
-          REQUIRE(H(r, c) == expected(r, c));
+          REQUIRE(u.H(r, c) == u.expected(r, c));
         }
       }
     }
@@ -340,20 +354,11 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
   // missing term.
   constexpr double kTolerance = productTolerance(1e-8);
   std::mt19937 rng(15);
-  std::uniform_real_distribution<double> value(-1e3, 1e3);
   for (int trial = 0; trial < 50; ++trial) {
-    Eigen::Matrix<double, 6, 3> A, B;
-    for (int k = 0; k < 18; ++k) {
-      A(k) = value(rng);
-      B(k) = value(rng);
-    }
     const int offset = 6 * (trial % kMaxWindowFrames);
-    WindowMatrix H, expected;
-    for (int k = 0; k < H.size(); ++k) H(k) = value(rng);
-    expected = H;
-    expected.block<6, 6>(offset, offset).noalias() -= A * B.transpose();
-    const WindowMatrix before = H;
-    backend::accumulateLowerTriangle<backend::Accumulate::kSubtract>(A, B, H.block<6, 6>(offset, offset));
+    BlockUpdateCase u = randomBlockUpdateCase(rng, offset, offset);
+    const WindowMatrix before = u.H;
+    backend::accumulateLowerTriangle<backend::Accumulate::kSubtract>(u.A, u.B, u.H.block<6, 6>(offset, offset));
     for (int c = 0; c < kWindowDim; ++c) {
       for (int r = 0; r < kWindowDim; ++r) {
         const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
@@ -361,9 +366,9 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
         // (never read), everything else above the diagonal and outside the block must stay.
         const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
         if (in_block && r >= c) {
-          REQUIRE(std::abs(H(r, c) - expected(r, c)) <= kTolerance);
+          REQUIRE(std::abs(u.H(r, c) - u.expected(r, c)) <= kTolerance);
         } else if (!pair_upper) {
-          REQUIRE(H(r, c) == before(r, c));
+          REQUIRE(u.H(r, c) == before(r, c));
         }
       }
     }
