@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <cstddef>
+#include <utility>
 
 #include "pipeline/bench/per_frame_median.h"
 #include "voca/core/error.h"

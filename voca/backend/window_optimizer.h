@@ -57,7 +57,8 @@ template <Accumulate kOp, typename DerivedA, typename DerivedB, typename Dst>
 // next) and A, B 6x3: the Schur loop's update of an off-diagonal block, over half of that loop's
 // time. Where the CPU has AVX (checked once at run time; the build stays at the SSE2 baseline) four
 // rows go in one register instead of two; elsewhere Eigen's product does it. Both compute every
-// entry as dst - ((a0 b0 + a1 b1) + a2 b2), with no fused multiply-add, so the bits are the same.
+// entry as dst - ((a0 b0 + a1 b1) + a2 b2), and the portable build fuses no multiply and add, so
+// their bits are the same there (a VOCA_NATIVE build with FMA may round both differently).
 void subtractProductTransposed(const Eigen::Matrix<double, 6, 3>& A, const Eigen::Matrix<double, 6, 3>& B, double* dst,
                                std::ptrdiff_t stride);
 
