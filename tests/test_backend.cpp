@@ -375,6 +375,62 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
   }
 }
 
+TEST_CASE("backend: one landmark's elimination from a frame's rows equals Eigen's products") {
+  using backend::kWindowDim, backend::WindowMatrix, backend::WindowVector;
+  // eliminateLandmarkFromFrame takes AVX where the CPU has it: bit for bit on x86-64 without FMA,
+  // a few units in the last place (relative) with it.
+  constexpr double kRelativeTolerance = productTolerance(1e-12);
+  const auto near = [&](double value, double expected) {
+    return std::abs(value - expected) <= kRelativeTolerance * (1.0 + std::abs(expected));
+  };
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> value(-1e3, 1e3), inverse(-1e-2, 1e-2);
+  for (int trial = 0; trial < 50; ++trial) {
+    const int offset = 6 * (trial % kMaxWindowFrames);
+    Eigen::Matrix<double, 6, 3> H_pl_f;
+    Eigen::Matrix3d H_ll_inv;
+    Eigen::Vector3d b_l;
+    for (int k = 0; k < 18; ++k) H_pl_f(k) = value(rng);
+    for (int k = 0; k < 9; ++k) H_ll_inv(k) = inverse(rng);
+    for (int k = 0; k < 3; ++k) b_l(k) = value(rng);
+    WindowMatrix H;
+    WindowVector b;
+    for (int k = 0; k < H.size(); ++k) H(k) = value(rng);
+    for (int k = 0; k < b.size(); ++k) b(k) = value(rng);
+    const WindowMatrix H_before = H;
+    const WindowVector b_before = b;
+    const Eigen::Matrix<double, 6, 3> T_expected = H_pl_f * H_ll_inv;
+    WindowMatrix H_expected = H;
+    H_expected.block<6, 6>(offset, offset).noalias() -= T_expected * H_pl_f.transpose();
+    WindowVector b_expected = b;
+    b_expected.segment<6>(offset).noalias() -= T_expected * b_l;
+
+    Eigen::Matrix<double, 6, 3> T;
+    backend::eliminateLandmarkFromFrame(H_pl_f, H_ll_inv, b_l, T, &b(offset), &H(offset, offset), H.outerStride());
+    for (int k = 0; k < 18; ++k) REQUIRE(near(T(k), T_expected(k)));
+    for (int r = 0; r < kWindowDim; ++r) {
+      const bool in_block = r >= offset && r < offset + 6;
+      if (in_block) {
+        REQUIRE(near(b(r), b_expected(r)));
+      } else {
+        REQUIRE(b(r) == b_before(r));
+      }
+    }
+    for (int c = 0; c < kWindowDim; ++c) {
+      for (int r = 0; r < kWindowDim; ++r) {
+        const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
+        // As accumulateLowerTriangle: the entry above the diagonal in each column pair may change.
+        const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
+        if (in_block && r >= c) {
+          REQUIRE(near(H(r, c), H_expected(r, c)));
+        } else if (!pair_upper) {
+          REQUIRE(H(r, c) == H_before(r, c));
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("backend: a pair's host information from lower triangles and one mirror equals the full sum") {
   // linearize() forms J_host^T W J_host per residual in the lower triangle only and mirrors the sum
   // once per frame pair. The lower triangle is the full product's bit for bit (same two products per

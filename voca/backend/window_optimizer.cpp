@@ -51,6 +51,52 @@ constexpr double kPoseStepConvergedNorm = 1e-5;
   }
 }
 
+// Column j of T (or of a block of the Schur complement), rows `first` to first+3 (or +1): the
+// columns of a 6x3 matrix at `a` times c0, c1, c2, summed in that order as Eigen's packet product
+// does per entry.
+[[gnu::target("avx"), gnu::always_inline]] inline __m256d combineFourRows(const double* a, double c0, double c1,
+                                                                          double c2) {
+  __m256d sum = _mm256_mul_pd(_mm256_loadu_pd(a), _mm256_set1_pd(c0));
+  sum = _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(a + 6), _mm256_set1_pd(c1)), sum);
+  return _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(a + 12), _mm256_set1_pd(c2)), sum);
+}
+[[gnu::target("avx"), gnu::always_inline]] inline __m128d combineTwoRows(const double* a, double c0, double c1,
+                                                                         double c2) {
+  __m128d sum = _mm_mul_pd(_mm_loadu_pd(a), _mm_set1_pd(c0));
+  sum = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a + 6), _mm_set1_pd(c1)), sum);
+  return _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a + 12), _mm_set1_pd(c2)), sum);
+}
+
+// eliminateLandmarkFromFrame on AVX, the same operations per entry as the Eigen code below it.
+[[gnu::target("avx")]] void eliminateLandmarkFromFrameAvx(const Eigen::Matrix<double, 6, 3>& H_pl_f,
+                                                          const Eigen::Matrix3d& H_ll_inv, const Eigen::Vector3d& b_l,
+                                                          Eigen::Matrix<double, 6, 3>& T_f, double* b_f,
+                                                          double* block_ff, std::ptrdiff_t stride) {
+  const double* h = H_pl_f.data();
+  double* t = T_f.data();
+  for (int j = 0; j < 3; ++j) {
+    const double c0 = H_ll_inv(0, j), c1 = H_ll_inv(1, j), c2 = H_ll_inv(2, j);
+    _mm256_storeu_pd(t + 6 * j, combineFourRows(h, c0, c1, c2));
+    _mm_storeu_pd(t + 6 * j + 4, combineTwoRows(h + 4, c0, c1, c2));
+  }
+  _mm256_storeu_pd(b_f, _mm256_sub_pd(_mm256_loadu_pd(b_f), combineFourRows(t, b_l(0), b_l(1), b_l(2))));
+  _mm_storeu_pd(b_f + 4, _mm_sub_pd(_mm_loadu_pd(b_f + 4), combineTwoRows(t + 4, b_l(0), b_l(1), b_l(2))));
+  // The lower triangle in column pairs from the diagonal down, as accumulateLowerTriangle.
+  for (int j = 0; j < 6; ++j) {
+    double* column = block_ff + j * stride;
+    const double c0 = h[j], c1 = h[j + 6], c2 = h[j + 12];
+    const int first = j & ~1;
+    if (first == 0) {
+      _mm256_storeu_pd(column, _mm256_sub_pd(_mm256_loadu_pd(column), combineFourRows(t, c0, c1, c2)));
+      _mm_storeu_pd(column + 4, _mm_sub_pd(_mm_loadu_pd(column + 4), combineTwoRows(t + 4, c0, c1, c2)));
+    } else if (first == 2) {
+      _mm256_storeu_pd(column + 2, _mm256_sub_pd(_mm256_loadu_pd(column + 2), combineFourRows(t + 2, c0, c1, c2)));
+    } else {
+      _mm_storeu_pd(column + 4, _mm_sub_pd(_mm_loadu_pd(column + 4), combineTwoRows(t + 4, c0, c1, c2)));
+    }
+  }
+}
+
 bool avxAvailable() {
   static const bool available = [] {
     __builtin_cpu_init();
@@ -72,6 +118,22 @@ void subtractProductTransposed(const Eigen::Matrix<double, 6, 3>& A, const Eigen
 #endif
   Eigen::Map<Eigen::Matrix<double, 6, 6>, 0, Eigen::OuterStride<>> block(dst, 6, 6, Eigen::OuterStride<>(stride));
   block.noalias() -= A * B.transpose();
+}
+
+void eliminateLandmarkFromFrame(const Eigen::Matrix<double, 6, 3>& H_pl_f, const Eigen::Matrix3d& H_ll_inv,
+                                const Eigen::Vector3d& b_l, Eigen::Matrix<double, 6, 3>& T_f, double* b_f,
+                                double* block_ff, std::ptrdiff_t stride) {
+#if VOCA_AVX_BLOCK_PRODUCT
+  if (avxAvailable()) {
+    eliminateLandmarkFromFrameAvx(H_pl_f, H_ll_inv, b_l, T_f, b_f, block_ff, stride);
+    return;
+  }
+#endif
+  T_f.noalias() = H_pl_f * H_ll_inv;
+  Eigen::Map<Eigen::Matrix<double, 6, 1>>(b_f).noalias() -= T_f * b_l;
+  accumulateLowerTriangle<Accumulate::kSubtract>(
+      T_f, H_pl_f,
+      Eigen::Map<Eigen::Matrix<double, 6, 6>, 0, Eigen::OuterStride<>>(block_ff, 6, 6, Eigen::OuterStride<>(stride)));
 }
 
 WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResiduals& model)
@@ -385,20 +447,17 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
           L.valid = false;
           continue;
         }
-        std::array<Mat63, kMaxWindowFrames> T;
         for (std::uint32_t m = L.frames; m != 0; m &= m - 1) {
           const int f = std::countr_zero(m);
-          T[static_cast<std::size_t>(f)].noalias() = H_pl(L, f) * L.H_ll_inv;
-          b_reduced_.segment<6>(6 * f).noalias() -= T[static_cast<std::size_t>(f)] * L.b_l;
-          // Slots g < f: the bits of L.frames below f; the block (f, f) apart, lower triangle only.
+          Mat63 T_f;
+          eliminateLandmarkFromFrame(H_pl(L, f), L.H_ll_inv, L.b_l, T_f, &b_reduced_(6 * f), &H_reduced_(6 * f, 6 * f),
+                                     H_reduced_.outerStride());
+          // Slots g < f: the bits of L.frames below f.
           const std::uint32_t lower = L.frames & ((1u << f) - 1u);
           for (std::uint32_t n = lower; n != 0; n &= n - 1) {
             const int g = std::countr_zero(n);
-            subtractProductTransposed(T[static_cast<std::size_t>(f)], H_pl(L, g), &H_reduced_(6 * f, 6 * g),
-                                      H_reduced_.outerStride());
+            subtractProductTransposed(T_f, H_pl(L, g), &H_reduced_(6 * f, 6 * g), H_reduced_.outerStride());
           }
-          accumulateLowerTriangle<Accumulate::kSubtract>(T[static_cast<std::size_t>(f)], H_pl(L, f),
-                                                         H_reduced_.block<6, 6>(6 * f, 6 * f));
         }
       }
       for (int f = 0; f < kMaxWindowFrames; ++f) {

@@ -62,6 +62,16 @@ template <Accumulate kOp, typename DerivedA, typename DerivedB, typename Dst>
 void subtractProductTransposed(const Eigen::Matrix<double, 6, 3>& A, const Eigen::Matrix<double, 6, 3>& B, double* dst,
                                std::ptrdiff_t stride);
 
+// One landmark's elimination from frame f's rows of the reduced camera system (the Schur loop, per
+// landmark and frame): T_f = H_pl(f) H_ll^-1, which the off-diagonal blocks (f, g) take next;
+// b_f -= T_f b_l; and the diagonal block (f, f) -= T_f H_pl(f)^T as accumulateLowerTriangle does
+// it (lower triangle and the three entries just above the diagonal). `block_ff` is that block in a
+// column-major matrix whose columns are `stride` doubles apart. AVX where the CPU has it, as
+// subtractProductTransposed, with the same bits as Eigen's products in the portable build.
+void eliminateLandmarkFromFrame(const Eigen::Matrix<double, 6, 3>& H_pl_f, const Eigen::Matrix3d& H_ll_inv,
+                                const Eigen::Vector3d& b_l, Eigen::Matrix<double, 6, 3>& T_f, double* b_f,
+                                double* block_ff, std::ptrdiff_t stride);
+
 // Copies the strict lower triangle of a 6x6 matrix onto its upper one.
 inline void mirrorLowerTriangle(Eigen::Matrix<double, 6, 6>& M) {
   for (int c = 1; c < 6; ++c) {
