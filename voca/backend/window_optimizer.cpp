@@ -170,8 +170,10 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
         if (!model_.residual(poses, bearing, lm, frame, c, r, &J, PoseJacobians::kTargetOnly)) continue;
         // Huber weights here too (Basalt's pose step ignores them, so one bad track can drag it).
         const double w = model_.weight(r.norm());
-        H.noalias() += w * J.d_target.transpose() * J.d_target;
-        b.noalias() += w * J.d_target.transpose() * r;
+        // The LDLT below reads the lower triangle only.
+        const Eigen::Matrix<double, 6, 2> JtW = w * J.d_target.transpose();
+        accumulateLowerTriangle<Accumulate::kAdd>(JtW, J.d_target.transpose(), H);
+        b.noalias() += JtW * r;
         ++count;
       }
     }
@@ -210,13 +212,23 @@ double WindowOptimizer::cost(const WindowState& state) const { return cost(state
     const Landmark& lm = landmarks[landmarks.alive()[static_cast<std::size_t>(k)]];
     if (!lm.alive) continue;
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
+    // Every residual first, then the sums in the same order, as in linearize().
+    std::array<Eigen::Vector2d, 2 * kMaxWindowFrames> residuals;
+    std::uint32_t projected_bits = 0;
+    int count = 0;
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
+      const int bit = std::countr_zero(m);
+      if (model_.residual(poses, bearing, lm, bit / 2, bit % 2, residuals[static_cast<std::size_t>(count)], nullptr)) {
+        projected_bits |= 1u << bit;
+      }
+    }
     double landmark_cost = 0.0;
     std::uint32_t outlier_bits = 0;
-    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+    count = 0;
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
       const int bit = std::countr_zero(m);
-      Eigen::Vector2d r;
-      const bool projected = model_.residual(poses, bearing, lm, bit / 2, bit % 2, r, nullptr);
-      const double e = projected ? r.norm() : 0.0;
+      const bool projected = (projected_bits & (1u << bit)) != 0;
+      const double e = projected ? residuals[static_cast<std::size_t>(count)].norm() : 0.0;
       landmark_cost += residualCost(projected, e);
       // filterOutliers' test, on the same residual.
       if (!projected || e > config_.outlier_threshold_px) outlier_bits |= 1u << bit;
