@@ -51,9 +51,9 @@ constexpr double kPoseStepConvergedNorm = 1e-5;
   }
 }
 
-// Column j of T (or of a block of the Schur complement), rows `first` to first+3 (or +1): the
-// columns of a 6x3 matrix at `a` times c0, c1, c2, summed in that order as Eigen's packet product
-// does per entry.
+// Four rows (combineTwoRows: two) of one column of a product with a 6x3 column-major matrix: its
+// three columns from the row at `a`, times c0, c1, c2, summed in that order as Eigen's packet
+// product does per entry.
 [[gnu::target("avx"), gnu::always_inline]] inline __m256d combineFourRows(const double* a, double c0, double c1,
                                                                           double c2) {
   __m256d sum = _mm256_mul_pd(_mm256_loadu_pd(a), _mm256_set1_pd(c0));
