@@ -28,9 +28,35 @@ constexpr double kTinyRegularization = 1e-9;
 constexpr double kPoseStepConvergedNorm = 1e-5;
 
 #if VOCA_AVX_BLOCK_PRODUCT
+// a0 c0 + a1 c1, then + a2 c2, per lane: how Eigen's packet product sums each entry of a 6x3 matrix
+// (columns a0, a1, a2) times three coefficients. The AVX kernels below all sum through these, so
+// their bits are Eigen's. Only the "avx" target: with "fma" GCC could fuse the multiplies and adds
+// and change the bits.
+[[gnu::target("avx"), gnu::always_inline]] inline __m256d combine(__m256d a0, __m256d a1, __m256d a2, double c0,
+                                                                  double c1, double c2) {
+  __m256d sum = _mm256_mul_pd(a0, _mm256_set1_pd(c0));
+  sum = _mm256_add_pd(_mm256_mul_pd(a1, _mm256_set1_pd(c1)), sum);
+  return _mm256_add_pd(_mm256_mul_pd(a2, _mm256_set1_pd(c2)), sum);
+}
+[[gnu::target("avx"), gnu::always_inline]] inline __m128d combine(__m128d a0, __m128d a1, __m128d a2, double c0,
+                                                                  double c1, double c2) {
+  __m128d sum = _mm_mul_pd(a0, _mm_set1_pd(c0));
+  sum = _mm_add_pd(_mm_mul_pd(a1, _mm_set1_pd(c1)), sum);
+  return _mm_add_pd(_mm_mul_pd(a2, _mm_set1_pd(c2)), sum);
+}
+// combine() of four rows (combineTwoRows: two) of a 6x3 column-major matrix, from the row at `a`.
+[[gnu::target("avx"), gnu::always_inline]] inline __m256d combineFourRows(const double* a, double c0, double c1,
+                                                                          double c2) {
+  return combine(_mm256_loadu_pd(a), _mm256_loadu_pd(a + 6), _mm256_loadu_pd(a + 12), c0, c1, c2);
+}
+[[gnu::target("avx"), gnu::always_inline]] inline __m128d combineTwoRows(const double* a, double c0, double c1,
+                                                                         double c2) {
+  return combine(_mm_loadu_pd(a), _mm_loadu_pd(a + 6), _mm_loadu_pd(a + 12), c0, c1, c2);
+}
+
 // subtractProductTransposed on AVX: per column j of dst, the columns of A (rows 0-3 and 4-5) times
-// B(j, k), summed k = 0, 1, 2, then subtracted, as Eigen's packet product does per entry. Only the
-// "avx" target: with "fma" GCC could fuse the multiplies and adds and change the bits.
+// B(j, k), combined, then subtracted. A's columns are loaded once: reloading them per column of dst
+// (which the compiler must do, dst could alias A) made the kernel ~7 % slower.
 [[gnu::target("avx")]] void subtractProductTransposedAvx(const Eigen::Matrix<double, 6, 3>& A,
                                                          const Eigen::Matrix<double, 6, 3>& B, double* dst,
                                                          std::ptrdiff_t stride) {
@@ -40,31 +66,9 @@ constexpr double kPoseStepConvergedNorm = 1e-5;
   for (int j = 0; j < 6; ++j) {
     double* column = dst + j * stride;
     const double b0 = B(j, 0), b1 = B(j, 1), b2 = B(j, 2);
-    __m256d top = _mm256_mul_pd(a0, _mm256_set1_pd(b0));
-    top = _mm256_add_pd(_mm256_mul_pd(a1, _mm256_set1_pd(b1)), top);
-    top = _mm256_add_pd(_mm256_mul_pd(a2, _mm256_set1_pd(b2)), top);
-    __m128d bottom = _mm_mul_pd(a0_low, _mm_set1_pd(b0));
-    bottom = _mm_add_pd(_mm_mul_pd(a1_low, _mm_set1_pd(b1)), bottom);
-    bottom = _mm_add_pd(_mm_mul_pd(a2_low, _mm_set1_pd(b2)), bottom);
-    _mm256_storeu_pd(column, _mm256_sub_pd(_mm256_loadu_pd(column), top));
-    _mm_storeu_pd(column + 4, _mm_sub_pd(_mm_loadu_pd(column + 4), bottom));
+    _mm256_storeu_pd(column, _mm256_sub_pd(_mm256_loadu_pd(column), combine(a0, a1, a2, b0, b1, b2)));
+    _mm_storeu_pd(column + 4, _mm_sub_pd(_mm_loadu_pd(column + 4), combine(a0_low, a1_low, a2_low, b0, b1, b2)));
   }
-}
-
-// Four rows (combineTwoRows: two) of one column of a product with a 6x3 column-major matrix: its
-// three columns from the row at `a`, times c0, c1, c2, summed in that order as Eigen's packet
-// product does per entry.
-[[gnu::target("avx"), gnu::always_inline]] inline __m256d combineFourRows(const double* a, double c0, double c1,
-                                                                          double c2) {
-  __m256d sum = _mm256_mul_pd(_mm256_loadu_pd(a), _mm256_set1_pd(c0));
-  sum = _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(a + 6), _mm256_set1_pd(c1)), sum);
-  return _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(a + 12), _mm256_set1_pd(c2)), sum);
-}
-[[gnu::target("avx"), gnu::always_inline]] inline __m128d combineTwoRows(const double* a, double c0, double c1,
-                                                                         double c2) {
-  __m128d sum = _mm_mul_pd(_mm_loadu_pd(a), _mm_set1_pd(c0));
-  sum = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a + 6), _mm_set1_pd(c1)), sum);
-  return _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a + 12), _mm_set1_pd(c2)), sum);
 }
 
 // eliminateLandmarkFromFrame on AVX, the same operations per entry as the Eigen code below it.
