@@ -322,6 +322,26 @@ BlockUpdateCase randomBlockUpdateCase(std::mt19937& rng, int row, int col) {
   return c;
 }
 
+// After a lower-triangle update of the diagonal block at (offset, offset), as accumulateLowerTriangle
+// makes it: its lower triangle `matches` (value, expected) entry by entry; the column pairs also
+// reach the entry above the diagonal in each pair, free to change (never read); everything else
+// above the diagonal and outside the block equals `before`.
+template <typename Matches>
+void requireLowerTriangleUpdate(const backend::WindowMatrix& H, const backend::WindowMatrix& before,
+                                const backend::WindowMatrix& expected, int offset, const Matches& matches) {
+  for (int c = 0; c < backend::kWindowDim; ++c) {
+    for (int r = 0; r < backend::kWindowDim; ++r) {
+      const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
+      const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
+      if (in_block && r >= c) {
+        REQUIRE(matches(H(r, c), expected(r, c)));
+      } else if (!pair_upper) {
+        REQUIRE(H(r, c) == before(r, c));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("backend: the Schur loop's off-diagonal block update equals Eigen's block product") {
@@ -348,7 +368,7 @@ TEST_CASE("backend: the Schur loop's off-diagonal block update equals Eigen's bl
 }
 
 TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full block product there") {
-  using backend::kWindowDim, backend::WindowMatrix;
+  using backend::WindowMatrix;
   // Bit for bit on x86-64 without FMA (the shipped build: the reduced system does not change by a
   // rounding). With FMA: a few units in the last place of terms up to 3e6 here, far below any
   // missing term.
@@ -359,19 +379,8 @@ TEST_CASE("backend: the Schur loop's lower-triangle block update equals the full
     BlockUpdateCase u = randomBlockUpdateCase(rng, offset, offset);
     const WindowMatrix before = u.H;
     backend::accumulateLowerTriangle<backend::Accumulate::kSubtract>(u.A, u.B, u.H.block<6, 6>(offset, offset));
-    for (int c = 0; c < kWindowDim; ++c) {
-      for (int r = 0; r < kWindowDim; ++r) {
-        const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
-        // The column pairs also reach the entry above the diagonal in each pair: free to change
-        // (never read), everything else above the diagonal and outside the block must stay.
-        const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
-        if (in_block && r >= c) {
-          REQUIRE(std::abs(u.H(r, c) - u.expected(r, c)) <= kTolerance);
-        } else if (!pair_upper) {
-          REQUIRE(u.H(r, c) == before(r, c));
-        }
-      }
-    }
+    requireLowerTriangleUpdate(u.H, before, u.expected, offset,
+                               [&](double value, double expected) { return std::abs(value - expected) <= kTolerance; });
   }
 }
 
@@ -416,18 +425,7 @@ TEST_CASE("backend: one landmark's elimination from a frame's rows equals Eigen'
         REQUIRE(b(r) == b_before(r));
       }
     }
-    for (int c = 0; c < kWindowDim; ++c) {
-      for (int r = 0; r < kWindowDim; ++r) {
-        const bool in_block = r >= offset && r < offset + 6 && c >= offset && c < offset + 6;
-        // As accumulateLowerTriangle: the entry above the diagonal in each column pair may change.
-        const bool pair_upper = in_block && c == r + 1 && (r - offset) % 2 == 0;
-        if (in_block && r >= c) {
-          REQUIRE(near(H(r, c), H_expected(r, c)));
-        } else if (!pair_upper) {
-          REQUIRE(H(r, c) == H_before(r, c));
-        }
-      }
-    }
+    requireLowerTriangleUpdate(H, H_before, H_expected, offset, near);
   }
 }
 
