@@ -3,13 +3,17 @@
 
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <unordered_map>
 
 #include "voca/backend/estimator.h"
 #include "voca/backend/id_map.h"
 #include "voca/backend/reprojection.h"
+#include "voca/backend/stereo_residuals.h"
 #include "voca/backend/synthetic.h"
 #include "voca/eval/metrics.h"
 #include "voca/synth/rigs.h"
@@ -299,6 +303,66 @@ TEST_CASE("backend: the pose-only step's target Jacobian equals the full model's
         }
       });
   CHECK(checked > 200);
+}
+
+TEST_CASE("backend: a landmark's residuals computed together equal residual() one by one, bit for bit") {
+  // linearize() and the cost pass take all of a landmark's residuals at once (two projections per
+  // register on the fisheye rig); the pose-only step and the outlier filter still take them one by
+  // one through residual(). Every decision compares these values, so they must be the same bits.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<std::uint32_t> any_mask(1u, (1u << (2 * kMaxWindowFrames)) - 1u);
+  for (const StereoRig& rig : {synth::eurocRig(), synth::tumviRig()}) {
+    const backend::StereoResiduals model(rig, 1.0, 1.0);
+    backend::Window window(0);
+    for (int f = 0; f < kMaxWindowFrames; ++f) {
+      window[f].T_w_c = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng),
+                                   0.2 * u(rng), 0.2 * u(rng), 0.2 * u(rng))
+                                      .finished());
+    }
+    const backend::WindowPoses poses = model.windowPoses(window);
+    int valid_total = 0, invalid_total = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+      backend::Landmark lm;
+      lm.alive = true;
+      lm.host = trial % kMaxWindowFrames;
+      // Mostly in front of the cameras; some far off the axis or behind (which the pinhole cannot
+      // project) and some not finite (which no camera can).
+      lm.s = Eigen::Vector2d(u(rng), u(rng)) * (trial % 4 == 0 ? 2.0 : 0.4);
+      lm.rho = trial % 40 == 7 ? std::numeric_limits<double>::quiet_NaN() : 0.1 + std::abs(u(rng));
+      lm.mask = any_mask(rng);
+      for (auto& frame : lm.px) {
+        for (Eigen::Vector2d& px : frame) px = Eigen::Vector2d(300.0 + 200.0 * u(rng), 250.0 + 200.0 * u(rng));
+      }
+      for (const bool with_jacobians : {true, false}) {
+        const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, with_jacobians);
+        std::array<Eigen::Vector2d, 2 * kMaxWindowFrames> r;
+        std::array<ReprojectionJacobians, 2 * kMaxWindowFrames> J;
+        const std::uint32_t valid =
+            model.landmarkResiduals(poses, bearing, lm, r.data(), with_jacobians ? J.data() : nullptr);
+        REQUIRE((valid & ~lm.mask) == 0u);
+        std::size_t i = 0;
+        for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++i) {
+          const int bit = std::countr_zero(m);
+          const int frame = bit / 2;
+          Eigen::Vector2d r_one;
+          ReprojectionJacobians J_one;
+          const bool ok = model.residual(poses, bearing, lm, frame, bit % 2, r_one, with_jacobians ? &J_one : nullptr,
+                                         frame != lm.host ? PoseJacobians::kHost : PoseJacobians::kNone);
+          REQUIRE(((valid >> bit) & 1u) == static_cast<std::uint32_t>(ok));
+          valid_total += ok;
+          invalid_total += !ok;
+          if (!ok) continue;
+          CHECK(std::memcmp(r[i].data(), r_one.data(), sizeof(double) * 2) == 0);
+          if (!with_jacobians) continue;
+          CHECK(std::memcmp(J[i].d_landmark.data(), J_one.d_landmark.data(), sizeof(double) * 6) == 0);
+          if (frame != lm.host) CHECK(std::memcmp(J[i].d_host.data(), J_one.d_host.data(), sizeof(double) * 12) == 0);
+        }
+      }
+    }
+    CHECK(valid_total > 1000);
+    CHECK(invalid_total > 20);
+  }
 }
 
 namespace {

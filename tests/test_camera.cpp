@@ -4,12 +4,15 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <random>
 
 #include "voca/camera/camera_models.h"
+#include "voca/camera/generic_camera.h"
 
 namespace {
 
@@ -489,6 +492,77 @@ TEST_CASE("atan2NonNegative agrees with std::atan2 to a few units in the last pl
     CHECK(std::abs(voca::camera_detail::atan2NonNegative(y, x) - std::atan2(y, x)) <=
           4e-16 * std::max(1.0, std::atan2(y, x)));
   }
+}
+
+TEST_CASE("kb4's two-lane projection gives project()'s values bit for bit, lane by lane") {
+  // WindowOptimizer's residual passes project two points per register (projectPair); every
+  // decision and trajectory depends on those values being project()'s own. Points of every kind:
+  // ordinary ones in front, near and on the axis (project()'s pinhole branch), behind the camera,
+  // beyond the largest angle, and not finite; paired in every combination by drawing both lanes.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> kind(0, 7);
+  const auto draw = [&]() -> Eigen::Vector3d {
+    switch (kind(rng)) {
+      case 0:
+        return {1e-10 * u(rng), 1e-10 * u(rng), 0.5 + u(rng)};  // within the axis test
+      case 1:
+        return {0.0, 0.0, u(rng)};
+      case 2:
+        return {u(rng), u(rng), -2.0 - u(rng)};  // far behind: beyond the largest angle
+      case 3:
+        return {std::numeric_limits<double>::quiet_NaN(), u(rng), 1.0};
+      case 4:
+        return {u(rng), u(rng), 0.0};
+      default:
+        return {u(rng), u(rng), u(rng)};
+    }
+  };
+  for (const bool fast : {true, false}) {
+    KannalaBrandt4Camera<double> camera(t265Kb4());
+    camera.setFastAngle(fast);
+    int both = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+      const std::array<Eigen::Vector3d, 2> p{draw(), draw()};
+      const bool jacobians = trial % 2 == 0;
+      std::array<Eigen::Vector2d, 2> uv_pair, uv_one;
+      std::array<Eigen::Matrix<double, 2, 3>, 2> J_pair, J_one;
+      for (std::size_t i = 0; i < 2; ++i) {
+        uv_pair[i].setConstant(7.0);
+        J_pair[i].setConstant(7.0);
+      }
+      const unsigned projected =
+          camera.projectPair({&p[0], &p[1]}, {&uv_pair[0], &uv_pair[1]},
+                             {jacobians ? &J_pair[0] : nullptr, jacobians ? &J_pair[1] : nullptr});
+      for (std::size_t i = 0; i < 2; ++i) {
+        const bool ok = camera.project(p[i], uv_one[i], jacobians ? &J_one[i] : nullptr);
+        REQUIRE(((projected >> i) & 1u) == static_cast<unsigned>(ok));
+        if (!ok) {
+          // Nothing is written for a point that does not project.
+          CHECK((uv_pair[i].array() == 7.0).all());
+          continue;
+        }
+        // Bit for bit (memcmp also tells -0 from +0).
+        CHECK(std::memcmp(uv_pair[i].data(), uv_one[i].data(), sizeof(double) * 2) == 0);
+        if (jacobians) CHECK(std::memcmp(J_pair[i].data(), J_one[i].data(), sizeof(double) * 6) == 0);
+        if (!jacobians) CHECK((J_pair[i].array() == 7.0).all());
+      }
+      both += projected == 3u;
+    }
+    CHECK(both > 5000);
+  }
+  // Models without a two-lane projection take project() twice through GenericCamera.
+  const voca::GenericCamera<double> pinhole =
+      voca::GenericCamera<double>::fromParams("pinhole", std::vector<double>{400.0, 300.0, 320.0, 240.0});
+  const std::array<Eigen::Vector3d, 2> p{Eigen::Vector3d(0.1, -0.2, 1.0), Eigen::Vector3d(0.3, 0.1, -1.0)};
+  std::array<Eigen::Vector2d, 2> uv;
+  std::array<Eigen::Matrix<double, 2, 3>, 2> J;
+  REQUIRE(pinhole.projectPair({&p[0], &p[1]}, {&uv[0], &uv[1]}, {&J[0], &J[1]}) == 1u);
+  Eigen::Vector2d uv_one;
+  Eigen::Matrix<double, 2, 3> J_one;
+  REQUIRE(pinhole.project(p[0], uv_one, &J_one));
+  CHECK(uv[0] == uv_one);
+  CHECK(J[0] == J_one);
 }
 
 TEST_CASE("kb4 with the fast angle projects as with std::atan2") {

@@ -113,37 +113,54 @@ Eigen::Matrix<double, 3, Cols> hatTimes(const Eigen::Vector3d& w, const Eigen::M
 // pose-only step, which moves nothing else).
 enum class PoseJacobians { kNone, kHost, kHostAndTarget, kTargetOnly };
 
-// Projects the landmark (bearing from HostBearing, built from the host's pose, and inverse distance
-// rho in the host frame's cam0, whose origin is t_w_host) into a camera of a target frame. Works in
-// homogeneous coordinates scaled by rho, so a point at infinity (rho = 0) is fine. Returns false
-// when the camera model cannot project it. jacobians->d_landmark is set when jacobians are asked
-// for (except with kTargetOnly), the pose blocks as `poses` says.
+// The landmark (bearing from HostBearing, built from the host's pose, and inverse distance rho in
+// the host frame's cam0, whose origin is t_w_host) in a camera of a target frame, before projection.
+// Works in homogeneous coordinates scaled by rho, so a point at infinity (rho = 0) is fine.
+struct PointInTarget {
+  Eigen::Vector3d dt_w;   // t_w_host - t_w_target
+  Eigen::Vector3d v_w;    // the point relative to the target origin, in world axes, scaled by rho
+  Eigen::Vector3d p_cam;  // in the target camera, scaled by rho
+};
+inline PointInTarget pointInTarget(const Eigen::Vector3d& t_w_host, const HostBearing& bearing,
+                                   const TargetCamera& target, double rho) {
+  PointInTarget point;
+  point.dt_w = t_w_host - target.t_w_target;
+  point.v_w = bearing.Rb_w + point.dt_w * rho;
+  point.p_cam = target.R_cam_w * point.v_w - target.offset_cam * rho;
+  return point;
+}
+
+// The Jacobians of its pixel from the camera's d_uv_d_p: d_landmark (except with kTargetOnly) and
+// the pose blocks as `poses` says.
+inline void targetJacobians(const Eigen::Matrix<double, 2, 3>& d_uv_d_p, const PointInTarget& point,
+                            const HostBearing& bearing, const TargetCamera& target, double rho,
+                            ReprojectionJacobians& jacobians, PoseJacobians poses) {
+  const Eigen::Vector3d& Rb_w = bearing.Rb_w;
+  const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_p * target.R_cam_w;
+  if (poses == PoseJacobians::kHost || poses == PoseJacobians::kHostAndTarget) {
+    jacobians.d_host.leftCols<3>() = d_uv_d_v * rho;
+    jacobians.d_host.rightCols<3>() = -timesHat(d_uv_d_v, Rb_w);
+  }
+  if (poses == PoseJacobians::kHostAndTarget || poses == PoseJacobians::kTargetOnly) {
+    jacobians.d_target.leftCols<3>() = -d_uv_d_v * rho;
+    // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
+    jacobians.d_target.rightCols<3>() = timesHat(d_uv_d_v, point.v_w);
+  }
+  if (poses == PoseJacobians::kTargetOnly) return;
+  jacobians.d_landmark.leftCols<2>() = d_uv_d_v * bearing.d_Rb_d_s;
+  jacobians.d_landmark.col(2) = d_uv_d_v * point.dt_w - d_uv_d_p * target.offset_cam;
+}
+
+// Projects the landmark into a camera of a target frame (pointInTarget, the camera, then
+// targetJacobians). Returns false when the camera model cannot project it.
 inline bool reprojectLandmark(const GenericCamera<double>& camera, const Eigen::Vector3d& t_w_host,
                               const HostBearing& bearing, const TargetCamera& target, double rho, Eigen::Vector2d& uv,
                               ReprojectionJacobians* jacobians = nullptr,
                               PoseJacobians poses = PoseJacobians::kHostAndTarget) {
-  const Eigen::Vector3d dt_w = t_w_host - target.t_w_target;
-  const Eigen::Vector3d& Rb_w = bearing.Rb_w;
-  // v: the point relative to the target origin, in world axes, scaled by rho.
-  const Eigen::Vector3d v_w = Rb_w + dt_w * rho;
-  const Eigen::Vector3d p_cam = target.R_cam_w * v_w - target.offset_cam * rho;
+  const PointInTarget point = pointInTarget(t_w_host, bearing, target, rho);
   Eigen::Matrix<double, 2, 3> d_uv_d_p;
-  if (!camera.project(p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
-  if (jacobians != nullptr) {
-    const Eigen::Matrix<double, 2, 3> d_uv_d_v = d_uv_d_p * target.R_cam_w;
-    if (poses == PoseJacobians::kHost || poses == PoseJacobians::kHostAndTarget) {
-      jacobians->d_host.leftCols<3>() = d_uv_d_v * rho;
-      jacobians->d_host.rightCols<3>() = -timesHat(d_uv_d_v, Rb_w);
-    }
-    if (poses == PoseJacobians::kHostAndTarget || poses == PoseJacobians::kTargetOnly) {
-      jacobians->d_target.leftCols<3>() = -d_uv_d_v * rho;
-      // R_t <- exp(w) R_t turns R_t^T v into R_t^T exp(-w) v ~ R_t^T (v + v^ w).
-      jacobians->d_target.rightCols<3>() = timesHat(d_uv_d_v, v_w);
-    }
-    if (poses == PoseJacobians::kTargetOnly) return true;
-    jacobians->d_landmark.leftCols<2>() = d_uv_d_v * bearing.d_Rb_d_s;
-    jacobians->d_landmark.col(2) = d_uv_d_v * dt_w - d_uv_d_p * target.offset_cam;
-  }
+  if (!camera.project(point.p_cam, uv, jacobians != nullptr ? &d_uv_d_p : nullptr)) return false;
+  if (jacobians != nullptr) targetJacobians(d_uv_d_p, point, bearing, target, rho, *jacobians, poses);
   return true;
 }
 
@@ -175,25 +192,30 @@ Eigen::Matrix<double, Rows, 6> timesHostToTarget(const Eigen::Vector3d& dt, cons
 // The same for a camera of the host frame itself: the point is the bearing moved by the fixed
 // extrinsic (cam0: the bearing itself), with no pose Jacobian. R_cam_cam0 and offset_cam as in
 // TargetCamera; cam0 says the camera is the host's cam0 (identity extrinsic).
+inline Eigen::Vector3d pointInHost(const Eigen::Matrix3d& R_cam_cam0, const Eigen::Vector3d& offset_cam, bool cam0,
+                                   const HostBearing& bearing, double rho) {
+  if (cam0) return bearing.b;
+  return R_cam_cam0 * bearing.b - offset_cam * rho;
+}
+inline void hostJacobian(const Eigen::Matrix<double, 2, 3>& d_uv_d_p, const Eigen::Matrix3d& R_cam_cam0,
+                         const Eigen::Vector3d& offset_cam, bool cam0, const HostBearing& bearing,
+                         Eigen::Matrix<double, 2, 3>& d_landmark) {
+  if (cam0) {
+    d_landmark.leftCols<2>() = d_uv_d_p * bearing.d_b_d_s;
+    d_landmark.col(2).setZero();
+    return;
+  }
+  const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
+  d_landmark.leftCols<2>() = d_uv_d_cam0 * bearing.d_b_d_s;
+  d_landmark.col(2) = -d_uv_d_p * offset_cam;
+}
 inline bool reprojectInHost(const GenericCamera<double>& camera, const Eigen::Matrix3d& R_cam_cam0,
                             const Eigen::Vector3d& offset_cam, bool cam0, const HostBearing& bearing, double rho,
                             Eigen::Vector2d& uv, Eigen::Matrix<double, 2, 3>* d_landmark = nullptr) {
   Eigen::Matrix<double, 2, 3> d_uv_d_p;
-  if (cam0) {
-    if (!camera.project(bearing.b, uv, d_landmark != nullptr ? &d_uv_d_p : nullptr)) return false;
-    if (d_landmark != nullptr) {
-      d_landmark->leftCols<2>() = d_uv_d_p * bearing.d_b_d_s;
-      d_landmark->col(2).setZero();
-    }
-    return true;
-  }
-  const Eigen::Vector3d p_cam = R_cam_cam0 * bearing.b - offset_cam * rho;
+  const Eigen::Vector3d p_cam = pointInHost(R_cam_cam0, offset_cam, cam0, bearing, rho);
   if (!camera.project(p_cam, uv, d_landmark != nullptr ? &d_uv_d_p : nullptr)) return false;
-  if (d_landmark != nullptr) {
-    const Eigen::Matrix<double, 2, 3> d_uv_d_cam0 = d_uv_d_p * R_cam_cam0;
-    d_landmark->leftCols<2>() = d_uv_d_cam0 * bearing.d_b_d_s;
-    d_landmark->col(2) = -d_uv_d_p * offset_cam;
-  }
+  if (d_landmark != nullptr) hostJacobian(d_uv_d_p, R_cam_cam0, offset_cam, cam0, bearing, *d_landmark);
   return true;
 }
 

@@ -4,6 +4,9 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
 
 #include "voca/backend/landmark_store.h"
 #include "voca/backend/reprojection.h"
@@ -58,6 +61,69 @@ class StereoResiduals {
     r = uv - lm.px[f][c];
     return r.allFinite();
   }
+  // Every residual of lm, at the bits of lm.mask, into r[i] for the i-th bit in mask order (and,
+  // when jac is set, the Jacobians the window's linearisation asks for into jac[i]: the host's pose
+  // Jacobian in frames other than the host, none in the host frame). The same values as residual()
+  // one by one; each camera's projections go two at a time through GenericCamera::projectPair.
+  // Returns the bits whose residual is valid (projected and finite); r and jac hold
+  // 2 * kMaxWindowFrames entries.
+  std::uint32_t landmarkResiduals(const WindowPoses& poses, const HostBearing& bearing, const Landmark& lm,
+                                  Eigen::Vector2d* r, ReprojectionJacobians* jac) const {
+    constexpr std::size_t kMaxResiduals = 2 * kMaxWindowFrames;
+    std::array<PointInTarget, kMaxResiduals> points;
+    std::array<Eigen::Vector2d, kMaxResiduals> uv;
+    std::array<Eigen::Matrix<double, 2, 3>, kMaxResiduals> d_uv_d_p;
+    std::array<std::array<std::size_t, kMaxResiduals>, 2> of_camera;
+    std::array<std::size_t, 2> in_camera{0, 0};
+    const auto host = static_cast<std::size_t>(lm.host);
+    std::size_t count = 0;
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
+      const int bit = std::countr_zero(m);
+      const auto f = static_cast<std::size_t>(bit / 2), c = static_cast<std::size_t>(bit % 2);
+      if (f == host) {
+        points[count].p_cam = pointInHost(cam0_cam_[c].R_inv, offset_cam_[c], c == 0, bearing, lm.rho);
+      } else {
+        points[count] = pointInTarget(poses[host].T_w_c0.t, bearing,
+                                      TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho);
+      }
+      of_camera[c][in_camera[c]++] = count;
+    }
+    std::uint32_t projected = 0;  // by position in mask order
+    for (std::size_t c = 0; c < 2; ++c) {
+      std::size_t k = 0;
+      for (; k + 1 < in_camera[c]; k += 2) {
+        const std::size_t a = of_camera[c][k], b = of_camera[c][k + 1];
+        const unsigned pair =
+            cameras_[c].projectPair({&points[a].p_cam, &points[b].p_cam}, {&uv[a], &uv[b]},
+                                    {jac != nullptr ? &d_uv_d_p[a] : nullptr, jac != nullptr ? &d_uv_d_p[b] : nullptr});
+        projected |= (pair & 1u) << a | (pair >> 1) << b;
+      }
+      if (k < in_camera[c]) {
+        const std::size_t a = of_camera[c][k];
+        if (cameras_[c].project(points[a].p_cam, uv[a], jac != nullptr ? &d_uv_d_p[a] : nullptr)) projected |= 1u << a;
+      }
+    }
+    std::uint32_t valid = 0;
+    count = 0;
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
+      if ((projected & (1u << count)) == 0) continue;
+      const int bit = std::countr_zero(m);
+      const auto f = static_cast<std::size_t>(bit / 2), c = static_cast<std::size_t>(bit % 2);
+      if (jac != nullptr) {
+        if (f == host) {
+          hostJacobian(d_uv_d_p[count], cam0_cam_[c].R_inv, offset_cam_[c], c == 0, bearing, jac[count].d_landmark);
+        } else {
+          targetJacobians(d_uv_d_p[count], points[count], bearing,
+                          TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho, jac[count],
+                          PoseJacobians::kHost);
+        }
+      }
+      r[count] = uv[count] - lm.px[f][c];
+      if (r[count].allFinite()) valid |= 1u << bit;
+    }
+    return valid;
+  }
+
   // Weight of a residual of norm e in the normal equations (inverse variance times the Huber weight).
   double weight(double e) const { return inv_var_ * (e <= huber_px_ ? 1.0 : huber_px_ / e); }
   // Its robust cost.

@@ -218,17 +218,10 @@ double WindowOptimizer::cost(const WindowState& state) const { return cost(state
     const HostBearing bearing(poses[static_cast<std::size_t>(lm.host)].T_w_c0, lm.s, false);
     // Every residual first, then the sums in the same order, as in linearize().
     std::array<Eigen::Vector2d, 2 * kMaxWindowFrames> residuals;
-    std::uint32_t projected_bits = 0;
-    int count = 0;
-    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
-      const int bit = std::countr_zero(m);
-      if (model_.residual(poses, bearing, lm, bit / 2, bit % 2, residuals[static_cast<std::size_t>(count)], nullptr)) {
-        projected_bits |= 1u << bit;
-      }
-    }
+    const std::uint32_t projected_bits = model_.landmarkResiduals(poses, bearing, lm, residuals.data(), nullptr);
     double landmark_cost = 0.0;
     std::uint32_t outlier_bits = 0;
-    count = 0;
+    int count = 0;
     for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
       const int bit = std::countr_zero(m);
       const bool projected = (projected_bits & (1u << bit)) != 0;
@@ -244,18 +237,6 @@ double WindowOptimizer::cost(const WindowState& state) const { return cost(state
 }
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
-
-namespace {
-
-// One residual of a landmark as linearize() computes it before summing.
-struct ObservationLin {
-  Eigen::Vector2d r;
-  ReprojectionJacobians J;
-  int target = 0;
-  bool projected = false;
-};
-
-}  // namespace
 
 [[gnu::flatten]] double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks,
                                                    bool full_hessian) {
@@ -285,25 +266,18 @@ struct ObservationLin {
     std::uint32_t targets = 0;
     // Every residual of the landmark first, then their sums in the same order: the projections are
     // independent of each other, and without the accumulation between them the CPU overlaps their
-    // long dependency chains (divisions, the angle's rational function).
-    std::array<ObservationLin, 2 * kMaxWindowFrames> observations;
+    // long dependency chains (divisions, the angle's rational function), two per register where the
+    // camera model allows (StereoResiduals::landmarkResiduals).
+    std::array<Eigen::Vector2d, 2 * kMaxWindowFrames> residuals;
+    std::array<ReprojectionJacobians, 2 * kMaxWindowFrames> jacobians;
+    const std::uint32_t valid = model_.landmarkResiduals(poses, bearing, lm, residuals.data(), jacobians.data());
     int count = 0;
-    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1) {
+    for (std::uint32_t m = lm.mask; m != 0; m &= m - 1, ++count) {
       const int bit = std::countr_zero(m);
       const int t = bit / 2;
-      ObservationLin& o = observations[static_cast<std::size_t>(count++)];
-      o.target = t;
-      // In the host frame the relative pose is the fixed extrinsic: no pose Jacobian. Elsewhere only
-      // the host's: the target's is the host's times D, applied per frame pair below.
-      o.projected = model_.residual(poses, bearing, lm, t, bit % 2, o.r, &o.J,
-                                    t != h ? PoseJacobians::kHost : PoseJacobians::kNone);
-    }
-    for (int i = 0; i < count; ++i) {
-      const ObservationLin& o = observations[static_cast<std::size_t>(i)];
-      const int t = o.target;
-      const Eigen::Vector2d& r = o.r;
-      const ReprojectionJacobians& J = o.J;
-      if (!o.projected) {
+      const Eigen::Vector2d& r = residuals[static_cast<std::size_t>(count)];
+      const ReprojectionJacobians& J = jacobians[static_cast<std::size_t>(count)];
+      if ((valid & (1u << bit)) == 0) {
         L.cost += residualCost(false, 0.0);
         continue;
       }

@@ -85,6 +85,23 @@ class GenericCamera {
   bool unproject(const Vec2& uv, Vec3& bearing, Mat32* d_bearing_d_uv = nullptr) const {
     return visit([&](const auto& model) { return model.unproject(uv, bearing, d_bearing_d_uv); });
   }
+  // Two points as project() projects them (the same values); models with a two-lane projection
+  // (kb4 in double) take both in one register. Bit i set when point i projects; d_uv_d_p[i] is
+  // written when d_uv_d_p[0] is set (then both must be).
+  unsigned projectPair(const std::array<const Vec3*, 2>& p_cam, const std::array<Vec2*, 2>& uv,
+                       const std::array<Mat23*, 2>& d_uv_d_p) const {
+    return visit([&](const auto& model) -> unsigned {
+      if constexpr (requires { model.projectPair(p_cam, uv, d_uv_d_p); }) {
+        return model.projectPair(p_cam, uv, d_uv_d_p);
+      } else {
+        unsigned projected = 0;
+        for (std::size_t i = 0; i < 2; ++i) {
+          if (model.project(*p_cam[i], *uv[i], d_uv_d_p[0] != nullptr ? d_uv_d_p[i] : nullptr)) projected |= 1u << i;
+        }
+        return projected;
+      }
+    });
+  }
 
   // Lets the models that have a faster angle computation use it (see KannalaBrandt4Camera::setFastAngle).
   void setFastAngle(bool fast) {
