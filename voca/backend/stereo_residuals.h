@@ -54,8 +54,7 @@ class StereoResiduals {
         return false;
       }
     } else if (!reprojectLandmark(cameras_[c], poses[static_cast<std::size_t>(lm.host)].T_w_c0.t, bearing,
-                                  TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho, uv, jac,
-                                  pose_jacobians)) {
+                                  targetCamera(poses, f, c), lm.rho, uv, jac, pose_jacobians)) {
       return false;
     }
     r = uv - lm.px[f][c];
@@ -83,8 +82,7 @@ class StereoResiduals {
       if (f == host) {
         points[count].p_cam = pointInHost(cam0_cam_[c].R_inv, offset_cam_[c], c == 0, bearing, lm.rho);
       } else {
-        points[count] = pointInTarget(poses[host].T_w_c0.t, bearing,
-                                      TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho);
+        points[count] = pointInTarget(poses[host].T_w_c0.t, bearing, targetCamera(poses, f, c), lm.rho);
       }
       of_camera[c][in_camera[c]++] = count;
     }
@@ -113,8 +111,7 @@ class StereoResiduals {
         if (f == host) {
           hostJacobian(d_uv_d_p[count], cam0_cam_[c].R_inv, offset_cam_[c], c == 0, bearing, jac[count].d_landmark);
         } else {
-          targetJacobians(d_uv_d_p[count], points[count], bearing,
-                          TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]}, lm.rho, jac[count],
+          targetJacobians(d_uv_d_p[count], points[count], bearing, targetCamera(poses, f, c), lm.rho, jac[count],
                           PoseJacobians::kHost);
         }
       }
@@ -133,6 +130,11 @@ class StereoResiduals {
   const SE3d& T_cam0_cam(int cam) const { return T_cam0_cam_[static_cast<std::size_t>(cam)]; }
 
  private:
+  // Camera c of window slot f as the residual passes use it.
+  TargetCamera targetCamera(const WindowPoses& poses, std::size_t f, std::size_t c) const {
+    return TargetCamera{poses[f].R_cam_w[c], poses[f].T_w_c0.t, offset_cam_[c]};
+  }
+
   std::array<GenericCamera<double>, 2> cameras_;
   std::array<SE3d, 2> T_cam0_cam_;
   std::array<PoseMatrices, 2> cam0_cam_;       // T_cam0_cam_ as matrices

@@ -11,6 +11,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <numbers>
@@ -148,6 +149,18 @@ inline Double2 atan2NonNegative(Double2 y, Double2 x) {
   const Double2 extra = select(steep, zero + kAtanMoreBits, select(middle, zero + 0.5 * kAtanMoreBits, zero));
   const Double2 angle = atanReduced(numerator / denominator, base, extra);
   return select(x < zero, std::numbers::pi - angle, angle);
+}
+
+// Two points through model.project() one at a time, as a two-lane projectPair() returns them: bit i
+// set when point i projects; Jacobians when d_uv_d_p[0] is set.
+template <typename Model, typename Vec3, typename Vec2, typename Mat23>
+inline unsigned projectEach(const Model& model, const std::array<const Vec3*, 2>& p_cam, const std::array<Vec2*, 2>& uv,
+                            const std::array<Mat23*, 2>& d_uv_d_p) {
+  unsigned projected = 0;
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (model.project(*p_cam[i], *uv[i], d_uv_d_p[0] != nullptr ? d_uv_d_p[i] : nullptr)) projected |= 1u << i;
+  }
+  return projected;
 }
 
 }  // namespace camera_detail
@@ -505,13 +518,7 @@ class KannalaBrandt4Camera {
     const bool jacobians = d_uv_d_p[0] != nullptr;
     // project()'s axis test, negated so that a NaN also goes the scalar way.
     const camera_detail::Mask2 off_axis = r > std::sqrt(std::numeric_limits<double>::epsilon()) * camera_detail::abs(z);
-    if (!fast_angle_ || !(off_axis[0] && off_axis[1])) {
-      unsigned projected = 0;
-      for (std::size_t i = 0; i < 2; ++i) {
-        if (project(*p_cam[i], *uv[i], jacobians ? d_uv_d_p[i] : nullptr)) projected |= 1u << i;
-      }
-      return projected;
-    }
+    if (!fast_angle_ || !(off_axis[0] && off_axis[1])) return camera_detail::projectEach(*this, p_cam, uv, d_uv_d_p);
     const Double2 theta = camera_detail::atan2NonNegative(r, z);
     const camera_detail::Mask2 within = theta <= max_theta_ + Double2{0.0, 0.0};
     const Double2 inv_r = 1.0 / r;

@@ -94,11 +94,7 @@ class GenericCamera {
       if constexpr (requires { model.projectPair(p_cam, uv, d_uv_d_p); }) {
         return model.projectPair(p_cam, uv, d_uv_d_p);
       } else {
-        unsigned projected = 0;
-        for (std::size_t i = 0; i < 2; ++i) {
-          if (model.project(*p_cam[i], *uv[i], d_uv_d_p[0] != nullptr ? d_uv_d_p[i] : nullptr)) projected |= 1u << i;
-        }
-        return projected;
+        return camera_detail::projectEach(model, p_cam, uv, d_uv_d_p);
       }
     });
   }
