@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 
 #include "tests/test_frontend_support.h"
@@ -453,6 +454,113 @@ TEST_CASE("frontend: tracks a translating plane with persistent ids, stereo matc
   // Drift over 5 frames of 8-bit images: median well below 0.05 px.
   CHECK(errors[errors.size() / 2] < 0.05);
   CHECK(errors[errors.size() * 9 / 10] < 0.1);
+}
+
+TEST_CASE("frontend: stereo_max_recovered_dist2_px2 sets the left-right match's round trip alone") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  struct Outcome {
+    int stereo_matched = 0;                              // frame 0
+    std::map<std::uint64_t, Eigen::Vector2f> right;      // frame 0's right observations
+    std::vector<double> disparity_errors;                // of those, against the plane's disparity
+    int temporal_kept = 0;                               // frame 1, left camera
+    std::map<std::uint64_t, Eigen::Vector2f> left_next;  // frame 1's left observations
+  };
+  // right_detail < 1: each 8x8 block of the right image keeps only this share of its detail beyond
+  // the plane fitted to it (its mean and mean gradient), as a coarsely quantised block of an
+  // independently encoded stream keeps its lowest frequencies; the left image stays exact.
+  const auto run = [&](double temporal, double stereo, double right_detail) {
+    FrontendConfig config;
+    config.prior_mode = PriorMode::kNone;
+    config.max_recovered_dist2_px2 = temporal;
+    config.stereo_max_recovered_dist2_px2 = stereo;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    PlaneSequence sequence = seq;
+    Outcome outcome;
+    for (int k = 0; k < 2; ++k) {
+      sequence.render(k);
+      if (right_detail < 1.0) {
+        const GrayImage source = sequence.right;
+        for (int by = 0; by + 8 <= sequence.kHeight; by += 8) {
+          for (int bx = 0; bx + 8 <= sequence.kWidth; bx += 8) {
+            double mean = 0.0, gx = 0.0, gy = 0.0;
+            for (int y = 0; y < 8; ++y)
+              for (int x = 0; x < 8; ++x) {
+                const double v = source(bx + x, by + y);
+                mean += v / 64.0;
+                gx += v * (x - 3.5) / 336.0;
+                gy += v * (y - 3.5) / 336.0;
+              }
+            for (int y = 0; y < 8; ++y)
+              for (int x = 0; x < 8; ++x) {
+                const double plane = mean + gx * (x - 3.5) + gy * (y - 3.5);
+                const double v = right_detail * source(bx + x, by + y) + (1.0 - right_detail) * plane;
+                sequence.right(bx + x, by + y) = static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+              }
+          }
+        }
+      }
+      frontend.track(sequence.input(k), frame, stats);
+      if (k == 0) {
+        outcome.stereo_matched = stats.stereo_matched;
+        std::map<std::uint64_t, Eigen::Vector2f> left;
+        for (const auto& o : frame.observations[0]) left[o.track_id] = o.px;
+        for (const auto& o : frame.observations[1]) {
+          outcome.right[o.track_id] = o.px;
+          const Eigen::Vector2f& l = left.at(o.track_id);
+          outcome.disparity_errors.push_back(
+              Eigen::Vector2d(o.px.x() - (l.x() - sequence.disparity), o.px.y() - l.y()).norm());
+        }
+      } else {
+        outcome.temporal_kept = stats.temporal[0].kept;
+        for (const auto& o : frame.observations[0]) outcome.left_next[o.track_id] = o.px;
+      }
+    }
+    return outcome;
+  };
+  const auto same = [](const std::map<std::uint64_t, Eigen::Vector2f>& a,
+                       const std::map<std::uint64_t, Eigen::Vector2f>& b) {
+    if (a.size() != b.size()) return false;
+    for (const auto& [id, px] : a) {
+      const auto it = b.find(id);
+      if (it == b.end() || it->second.x() != px.x() || it->second.y() != px.y()) return false;
+    }
+    return true;
+  };
+  const Outcome basalt = run(0.25, 0.0, 1.0);
+  REQUIRE(basalt.stereo_matched >= 20);
+  REQUIRE(basalt.temporal_kept >= 20);
+  // 0 takes the temporal tolerance, bit for bit.
+  const Outcome explicit_same = run(0.25, 0.25, 1.0);
+  CHECK(explicit_same.stereo_matched == basalt.stereo_matched);
+  CHECK(same(explicit_same.right, basalt.right));
+  CHECK(same(explicit_same.left_next, basalt.left_next));
+  // A stereo tolerance no round trip meets leaves the right camera empty and the left tracks as they were.
+  const Outcome no_stereo = run(0.25, 1e-30, 1.0);
+  CHECK(no_stereo.stereo_matched == 0);
+  CHECK(same(no_stereo.left_next, basalt.left_next));
+  // A temporal tolerance no round trip meets loses the left tracks and leaves the stereo matches as they were.
+  const Outcome no_temporal = run(1e-30, 0.25, 1.0);
+  CHECK(no_temporal.stereo_matched == basalt.stereo_matched);
+  CHECK(same(no_temporal.right, basalt.right));
+  CHECK(no_temporal.temporal_kept == 0);
+  // With most of the right image's detail gone a correct match strays on its round trip (the two
+  // directions align different images): the looser stereo tolerance keeps more of the matches, near
+  // the plane's disparity (measured: 30 and 37 of 38, median error 0.54 px, largest 1.24 px).
+  const Outcome strict = run(0.25, 0.0, 0.15);
+  Outcome loose = run(0.25, 1.0, 0.15);
+  MESSAGE("stereo matches with 15 % of the right image's block detail: "
+          << strict.stereo_matched << " at 0.25 px^2, " << loose.stereo_matched << " at 1 px^2, of "
+          << basalt.stereo_matched << " with the whole detail");
+  CHECK(loose.stereo_matched > strict.stereo_matched);
+  REQUIRE(!loose.disparity_errors.empty());
+  std::sort(loose.disparity_errors.begin(), loose.disparity_errors.end());
+  MESSAGE("disparity error at 1 px^2: median " << loose.disparity_errors[loose.disparity_errors.size() / 2]
+                                               << " px, max " << loose.disparity_errors.back() << " px");
+  CHECK(loose.disparity_errors[loose.disparity_errors.size() / 2] < 0.75);
+  CHECK(loose.disparity_errors.back() < 2.0);
 }
 
 TEST_CASE("frontend: detection_nonoverlap adds right-only tracks where the left camera does not see") {

@@ -99,6 +99,10 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.skip_coarse_outside);        // measured better on the fisheye (configs/README.md)
   CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"skip_coarse_outside": true}})"), "x")
             .frontend.skip_coarse_outside);
+  // The stereo round trip's own tolerance: 0 (the default) = max_recovered_dist2_px2.
+  CHECK(FrontendConfig{}.stereo_max_recovered_dist2_px2 == 0.0);
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"stereo_max_recovered_dist2_px2": 1.0}})"), "x")
+            .frontend.stereo_max_recovered_dist2_px2 == 1.0);
 }
 
 TEST_CASE("config: unknown keys, wrong types and out-of-range values name the key and the allowed values") {
@@ -121,6 +125,9 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
 
   message = errorFor(R"({"frontend": {"max_recovered_dist2_px2": 0}})");
   CHECK(contains(message, "frontend.max_recovered_dist2_px2: expected a number in (0, 100], got 0"));
+
+  message = errorFor(R"({"frontend": {"stereo_max_recovered_dist2_px2": -1}})");
+  CHECK(contains(message, "frontend.stereo_max_recovered_dist2_px2: expected a number in [0, 100], got -1"));
 
   message = errorFor(R"({"frontend": {"consensus_tolerance_px2": -1}})");
   CHECK(contains(message, "frontend.consensus_tolerance_px2: expected a number in [0,"));

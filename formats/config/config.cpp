@@ -40,6 +40,7 @@ const FrontendField kFrontendFields[] = {
     {"coarse_min_step_px", &FrontendConfig::coarse_min_step_px},
     {"pattern", &FrontendConfig::pattern},
     {"max_recovered_dist2_px2", &FrontendConfig::max_recovered_dist2_px2},
+    {"stereo_max_recovered_dist2_px2", &FrontendConfig::stereo_max_recovered_dist2_px2},
     {"epipolar_error", &FrontendConfig::epipolar_error},
     {"matching_guess", FrontendChoice{[](FrontendConfig& c, std::string_view text) {
                                         const auto guess = parseStereoGuess(text);

@@ -62,6 +62,10 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   num_levels_ = config_.pyramid_levels + 1;
   prior_levels_ = config_.prior_pyramid_levels < 0 ? num_levels_ : config_.prior_pyramid_levels + 1;
   backward_levels_ = config_.backward_pyramid_levels < 0 ? num_levels_ : config_.backward_pyramid_levels + 1;
+  temporal_round_trip2_ = static_cast<float>(config_.max_recovered_dist2_px2);
+  stereo_round_trip2_ = config_.stereo_max_recovered_dist2_px2 > 0.0
+                            ? static_cast<float>(config_.stereo_max_recovered_dist2_px2)
+                            : temporal_round_trip2_;
   align_.max_iterations = config_.max_iterations;
   align_.min_step_px = static_cast<float>(config_.min_step_px);
   align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
@@ -188,8 +192,8 @@ bool KltFrontend::trackForward(std::span<const PatchTemplate> forward, const Ima
 
 bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                                 const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                                const Eigen::Vector2f& fine_start, int levels, CameraState& owner,
-                                int backward_slot) const {
+                                const Eigen::Vector2f& fine_start, int levels, float max_recovered_dist2,
+                                CameraState& owner, int backward_slot) const {
   // The backward track starts from the negated guess, so a correct prior lands it near p again. A
   // check on fewer levels than the forward track starts where undoing the forward track's coarse
   // levels would put it: p plus what its finer levels moved.
@@ -202,15 +206,17 @@ bool KltFrontend::checkBackward(const ImagePyramid& from, const ImagePyramid& to
   buildPyramidPatch(to, tracked, *pattern_, backward);
   owner.built_levels[static_cast<std::size_t>(backward_slot)] = split;
   if (trackPatch(backward, from, *pattern_, align_, T_backward) != AlignStatus::kConverged) return false;
-  return (T_backward.translation() - p).squaredNorm() <= static_cast<float>(config_.max_recovered_dist2_px2);
+  return (T_backward.translation() - p).squaredNorm() <= max_recovered_dist2;
 }
 
 bool KltFrontend::trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
                                const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
-                               CameraState& owner, int backward_slot, Eigen::Vector2f& result) const {
+                               float max_recovered_dist2, CameraState& owner, int backward_slot,
+                               Eigen::Vector2f& result) const {
   Eigen::Vector2f tracked, fine_start;
   if (!trackForward(forward, to, p, flow_guess, levels, tracked, fine_start)) return false;
-  if (!checkBackward(from, to, p, tracked, flow_guess, fine_start, levels, owner, backward_slot)) return false;
+  if (!checkBackward(from, to, p, tracked, flow_guess, fine_start, levels, max_recovered_dist2, owner, backward_slot))
+    return false;
   result = tracked;
   return true;
 }
@@ -328,7 +334,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
     const auto forward = [&](int levels) { return cam.trackedTemplates(forward_slot, from, p, levels, *pattern_); };
     const auto attempt = [&](const Eigen::Vector2f& guess, int levels, int backward_slot, Eigen::Vector2f& tracked) {
-      return trackChecked(forward(levels), from, to, p, guess, levels, cam, backward_slot, tracked);
+      return trackChecked(forward(levels), from, to, p, guess, levels, temporal_round_trip2_, cam, backward_slot,
+                          tracked);
     };
     if (mode == PriorMode::kMvParallelOf && run_prior) {
       // The plain track first, with its round trip. When the prior's forward track agrees with a
@@ -336,8 +343,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
       // trip says, so that one is skipped; the outcome equals running both checks.
       Eigen::Vector2f plain_fine_start, prior_fine_start;
       const bool plain_forward = trackForward(forward(all_levels), to, p, zero, all_levels, plain_px, plain_fine_start);
-      plain_ok =
-          plain_forward && checkBackward(from, to, p, plain_px, zero, plain_fine_start, all_levels, cam, plain_slot);
+      plain_ok = plain_forward && checkBackward(from, to, p, plain_px, zero, plain_fine_start, all_levels,
+                                                temporal_round_trip2_, cam, plain_slot);
       const bool confirmed = plain_ok && agree_radius2 > 0.f && (p + mv - plain_px).squaredNorm() <= agree_radius2;
       ts.prior_confirmed += confirmed && !same_start;
       if (same_start || confirmed) {
@@ -349,8 +356,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
         const bool prior_forward =
             trackForward(forward(prior_levels), to, p, mv, prior_levels, prior_px, prior_fine_start);
         const bool agree = plain_ok && prior_forward && (plain_px - prior_px).squaredNorm() <= tolerance;
-        prior_ok = agree || (prior_forward &&
-                             checkBackward(from, to, p, prior_px, mv, prior_fine_start, prior_levels, cam, prior_slot));
+        prior_ok = agree || (prior_forward && checkBackward(from, to, p, prior_px, mv, prior_fine_start, prior_levels,
+                                                            temporal_round_trip2_, cam, prior_slot));
       }
     } else {
       // The retry of the sequential modes runs only from a different start: from the same one it
@@ -469,8 +476,9 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, Fro
     const int slot = retry ? cam.acquire() : -1;
     Eigen::Vector2f tracked = trace.previous_px + cam.previous_flow;
     const bool ok =
-        retry && trackChecked(cam.trackedTemplates(candidate.slot, from, trace.previous_px, num_levels_, *pattern_),
-                              from, to, trace.previous_px, cam.previous_flow, num_levels_, cam, slot, tracked);
+        retry &&
+        trackChecked(cam.trackedTemplates(candidate.slot, from, trace.previous_px, num_levels_, *pattern_), from, to,
+                     trace.previous_px, cam.previous_flow, num_levels_, temporal_round_trip2_, cam, slot, tracked);
     cam.release(candidate.slot);
     if (!ok) {
       if (slot >= 0) cam.release(slot);
@@ -553,8 +561,8 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
     }
     Eigen::Vector2f matched;
     const int right_slot = right.acquire();
-    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, right, right_slot,
-                     matched)) {
+    if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, stereo_round_trip2_,
+                     right, right_slot, matched)) {
       right.ids.push_back(id);
       right.points.push_back(matched);
       right.slots.push_back(right_slot);

@@ -186,12 +186,12 @@ class KltFrontend {
 
   // Forward-backward tracking from `from` to `to` with a flow guess on the finest `levels` pyramid
   // levels; true and the converged position when both directions converge and the round trip returns
-  // within max_recovered_dist2. `forward` holds the templates of p in `from` (shared by all guesses
-  // of one point); slot `backward_slot` of `owner` receives the templates at the result in `to`, on
-  // the levels the round trip runs on (built_levels).
+  // within max_recovered_dist2 (squared px). `forward` holds the templates of p in `from` (shared by all
+  // guesses of one point); slot `backward_slot` of `owner` receives the templates at the result in
+  // `to`, on the levels the round trip runs on (built_levels).
   bool trackChecked(std::span<const PatchTemplate> forward, const ImagePyramid& from, const ImagePyramid& to,
-                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels, CameraState& owner,
-                    int backward_slot, Eigen::Vector2f& result) const;
+                    const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels, float max_recovered_dist2,
+                    CameraState& owner, int backward_slot, Eigen::Vector2f& result) const;
   // The two halves of trackChecked: the forward track alone, and the round-trip check of its result.
   // fine_start: where the forward track's levels below backward_levels_ started (p + flow_guess when
   // the check runs on every level the forward track ran on).
@@ -200,7 +200,8 @@ class KltFrontend {
                     Eigen::Vector2f& fine_start) const;
   bool checkBackward(const ImagePyramid& from, const ImagePyramid& to, const Eigen::Vector2f& p,
                      const Eigen::Vector2f& tracked, const Eigen::Vector2f& flow_guess,
-                     const Eigen::Vector2f& fine_start, int levels, CameraState& owner, int backward_slot) const;
+                     const Eigen::Vector2f& fine_start, int levels, float max_recovered_dist2, CameraState& owner,
+                     int backward_slot) const;
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   // thin_when_full_px: drops the younger of two left tracks too close together, in both cameras.
   void thinTracks(FrontendStats& stats);
@@ -223,8 +224,11 @@ class KltFrontend {
   const PatchPattern* pattern_ = nullptr;
   AlignParams align_;
   int num_levels_ = 0;
-  int prior_levels_ = 0;     // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
-  int backward_levels_ = 0;  // at most this many levels in a round-trip check (backward_pyramid_levels + 1)
+  int prior_levels_ = 0;  // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
+  int backward_levels_ = 0;
+  // Round-trip tolerances (squared px): a temporal track's, and the left-to-right match's.
+  float temporal_round_trip2_ = 0.f;
+  float stereo_round_trip2_ = 0.f;  // at most this many levels in a round-trip check (backward_pyramid_levels + 1)
   int max_points_ = 0;
   int width_ = 0, height_ = 0;
   std::array<GenericCamera<double>, 2> cameras_model_;

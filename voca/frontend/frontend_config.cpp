@@ -103,6 +103,7 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
     throw InputError(fmt::format("{}.pattern: expected 24 or 52, got {}", context, c.pattern));
   }
   checkReal(context, "max_recovered_dist2_px2", c.max_recovered_dist2_px2, 0.0, 100.0, true);
+  checkReal(context, "stereo_max_recovered_dist2_px2", c.stereo_max_recovered_dist2_px2, 0.0, 100.0, false);
   checkReal(context, "epipolar_error", c.epipolar_error, 0.0, 1.0, true);
   checkReal(context, "matching_default_depth_m", c.matching_default_depth_m, 0.0, 1e4, true);
   checkReal(context, "image_safe_radius_px", c.image_safe_radius_px, 0.0, 1e5, false);

@@ -67,7 +67,12 @@ struct FrontendConfig {
   bool skip_coarse_outside = false;
   int pattern = 52;                       // 24 or 52 sample points per patch
   double max_recovered_dist2_px2 = 0.25;  // forward-backward round trip tolerance
-  double epipolar_error = 0.005;          // |f0^T E f1| on unit bearings
+  // The same tolerance for the left-to-right match of a new point; 0 = max_recovered_dist2_px2 (Basalt
+  // uses one for both). The two cameras are encoded as separate streams, each with its own
+  // quantisation artefacts, so a correct stereo match returns less exactly than a temporal track
+  // within one stream, whose P-frames carry the texture along the motion (configs/README.md).
+  double stereo_max_recovered_dist2_px2 = 0.0;
+  double epipolar_error = 0.005;  // |f0^T E f1| on unit bearings
   StereoGuess matching_guess = StereoGuess::kFixedDepth;
   double matching_default_depth_m = 2.0;
   double image_safe_radius_px = 0.0;  // detect only this close to the principal point; 0 = everywhere
