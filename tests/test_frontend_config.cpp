@@ -65,6 +65,10 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(tumvi.frontend.prior_agree_radius_px == 1.0);
   CHECK(tumvi.frontend.thin_when_full_px == 8.0);
   CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.thin_when_full_px == 8.0);
+  // The left-right match's round trip: its own tolerance in the kitti file only (configs/README.md).
+  CHECK(loadConfig(shippedConfig("kitti_vo.json")).frontend.stereo_max_recovered_dist2_px2 == 0.5);
+  CHECK(loadConfig(shippedConfig("euroc_vo.json")).frontend.stereo_max_recovered_dist2_px2 == 0.0);
+  CHECK(loadConfig(shippedConfig("tumvi_vo.json")).frontend.stereo_max_recovered_dist2_px2 == 0.0);
   CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
   // Ours, off by default (Basalt's behaviour), on raw frames in every file (configs/README.md).
   CHECK(FrontendConfig{}.retry_previous_flow == InputScope::kOff);
