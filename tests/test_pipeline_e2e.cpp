@@ -349,6 +349,28 @@ TEST_CASE("pipeline e2e: an unreadable image in a raw dataset is skipped as dama
   CHECK(countRows(dir / "cli.txt") == 24);
 }
 
+TEST_CASE("pipeline e2e: a failure with few right-camera points hints at stereo_max_recovered_dist2_px2, once") {
+  // At 60 kbit/s the two cameras' streams differ so much that almost no stereo match passes its round
+  // trip, and the estimator finds too few stereo points.
+  test::ScratchDir dir("pipeline-stereo-hint");
+  const std::string run =
+      "run " + rendered().raw.string() + " --encode 60k --mode none --threads 1 -o " + (dir / "traj.txt").string();
+  const test::CommandOutput plain = test::runVocaOutput(run);
+  INFO(plain.text);
+  REQUIRE(plain.exit_code == 0);
+  const std::size_t hint = plain.text.find("hint: the right camera holds ");
+  CHECK(hint != std::string::npos);
+  CHECK(plain.text.find("\"stereo_max_recovered_dist2_px2\"", hint) != std::string::npos);
+  CHECK(plain.text.find("hint: the right camera", hint + 1) == std::string::npos);
+  // A config whose stereo round trip is looser than the temporal one already has what the hint says.
+  const fs::path config = dir / "stereo.json";
+  std::ofstream(config) << R"({"frontend": {"stereo_max_recovered_dist2_px2": 1.0}})";
+  const test::CommandOutput loose = test::runVocaOutput(run + " --config " + config.string());
+  INFO(loose.text);
+  CHECK(loose.exit_code == 0);
+  CHECK(loose.text.find("hint: the right camera") == std::string::npos);
+}
+
 TEST_CASE("pipeline e2e: a failure where the tracker lost most points hints at retry_previous_flow, once") {
   // Twelve frames cut out of the fast sequence: the image jumps far beyond the pyramid's reach.
   test::ScratchDir dir("pipeline-jump");

@@ -36,19 +36,24 @@ struct EncodeInterrupted {};
 class ProgressSink final : public FrameSink {
  public:
   // suggest_flow_retry: retry_previous_flow does not act on this input, so a failure where the
-  // temporal step lost most points gets a hint at that key, once.
-  ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry)
+  // temporal step lost most points gets a hint at that key, once. suggest_stereo_tolerance: the
+  // left-right match has no looser round trip than the temporal tracks, so a failure where the right
+  // camera holds few of the left camera's points gets a hint at stereo_max_recovered_dist2_px2, once.
+  ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry,
+               bool suggest_stereo_tolerance)
       : total_(total),
         estimate_(estimate),
         frontend_stage_(frontend_stage),
         backend_stage_(backend_stage),
-        suggest_flow_retry_(suggest_flow_retry) {}
+        suggest_flow_retry_(suggest_flow_retry),
+        suggest_stereo_tolerance_(suggest_stereo_tolerance) {}
   void consume(const FrameSlot& slot) override {
     ++frames_;
     if (estimate_ && slot.pose.state != TrackingState::kTracking) {
       line_.message("frame {}: {} ({})", slot.frame.frame_index, trackingStateName(slot.pose.state),
                     failureReasonName(slot.pose.failure));
       hintAtFlowRetry(slot);
+      hintAtStereoTolerance(slot);
     }
     if (frames_ % 20 != 0 && frames_ != total_) return;
     const auto ms = [&](int stage) {
@@ -81,6 +86,24 @@ class ProgressSink final : public FrameSink {
         t.previous - t.kept, t.previous);
   }
 
+  // A right camera with few of the left camera's points: on strongly compressed video the stereo
+  // matches fail their round trip (configs/README.md, "The left-right match's round trip").
+  void hintAtStereoTolerance(const FrameSlot& slot) {
+    constexpr int kMinPoints = 20;
+    const FrontendStats& f = slot.frontend_stats;
+    const bool starved =
+        slot.pose.failure == FailureReason::kTooFewInliers || slot.pose.failure == FailureReason::kTooFewStereoPoints;
+    if (!suggest_stereo_tolerance_ || !starved || f.num_left < kMinPoints || 4 * f.num_right >= f.num_left) return;
+    suggest_stereo_tolerance_ = false;
+    line_.message(
+        "hint: the right camera holds {} of the left camera's {} points. On strongly compressed video the stereo "
+        "matches fail their round trip (each camera's stream has its own artefacts): set "
+        "\"stereo_max_recovered_dist2_px2\" to 0.5-1 in the config's frontend section (configs/README.md). A "
+        "stereo calibration that is off, or \"matching_default_depth_m\" far from the scene's depth, loses them "
+        "too.",
+        f.num_right, f.num_left);
+  }
+
   // "12/300", or "12" for live input of unknown length.
   std::string count() const { return total_ > 0 ? fmt::format("{}/{}", frames_, total_) : fmt::format("{}", frames_); }
 
@@ -88,6 +111,7 @@ class ProgressSink final : public FrameSink {
   bool estimate_;
   int frontend_stage_, backend_stage_;
   bool suggest_flow_retry_;
+  bool suggest_stereo_tolerance_;
   std::int64_t frames_ = 0;
   platform::ProgressLine line_;
 };
@@ -314,9 +338,10 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   }
   std::unique_ptr<ProgressSink> progress;
   if (options.progress) {
-    progress =
-        std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position,
-                                       !appliesTo(result.config.frontend.retry_previous_flow, result.has_motion));
+    progress = std::make_unique<ProgressSink>(
+        info.expected_frames, options.estimate, frontend_position, backend_position,
+        !appliesTo(result.config.frontend.retry_previous_flow, result.has_motion),
+        result.config.frontend.stereo_max_recovered_dist2_px2 <= result.config.frontend.max_recovered_dist2_px2);
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
