@@ -362,7 +362,7 @@ TEST_CASE("pipeline e2e: a failure with few right-camera points hints at stereo_
   CHECK(hint != std::string::npos);
   CHECK(plain.text.find("\"stereo_max_recovered_dist2_px2\"", hint) != std::string::npos);
   CHECK(plain.text.find("hint: the right camera", hint + 1) == std::string::npos);
-  // A config whose stereo round trip is looser than the temporal one already has what the hint says.
+  // A config whose stereo round trip is already as loose as the hint says gets none.
   const fs::path config = dir / "stereo.json";
   std::ofstream(config) << R"({"frontend": {"stereo_max_recovered_dist2_px2": 1.0}})";
   const test::CommandOutput loose = test::runVocaOutput(run + " --config " + config.string());

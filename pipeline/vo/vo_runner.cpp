@@ -37,7 +37,7 @@ class ProgressSink final : public FrameSink {
  public:
   // suggest_flow_retry: retry_previous_flow does not act on this input, so a failure where the
   // temporal step lost most points gets a hint at that key, once. suggest_stereo_tolerance: the
-  // left-right match has no looser round trip than the temporal tracks, so a failure where the right
+  // left-right match's round trip is tighter than the hint's 0.5-1 px^2, so a failure where the right
   // camera holds few of the left camera's points gets a hint at stereo_max_recovered_dist2_px2, once.
   ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry,
                bool suggest_stereo_tolerance)
@@ -338,10 +338,10 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   }
   std::unique_ptr<ProgressSink> progress;
   if (options.progress) {
+    const FrontendConfig& tracker = result.config.frontend;
     progress = std::make_unique<ProgressSink>(
         info.expected_frames, options.estimate, frontend_position, backend_position,
-        !appliesTo(result.config.frontend.retry_previous_flow, result.has_motion),
-        result.config.frontend.stereo_max_recovered_dist2_px2 <= result.config.frontend.max_recovered_dist2_px2);
+        !appliesTo(tracker.retry_previous_flow, result.has_motion), tracker.stereoRoundTripDist2() < 0.5);
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());

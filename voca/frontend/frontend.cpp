@@ -63,9 +63,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   prior_levels_ = config_.prior_pyramid_levels < 0 ? num_levels_ : config_.prior_pyramid_levels + 1;
   backward_levels_ = config_.backward_pyramid_levels < 0 ? num_levels_ : config_.backward_pyramid_levels + 1;
   temporal_round_trip2_ = static_cast<float>(config_.max_recovered_dist2_px2);
-  stereo_round_trip2_ = config_.stereo_max_recovered_dist2_px2 > 0.0
-                            ? static_cast<float>(config_.stereo_max_recovered_dist2_px2)
-                            : temporal_round_trip2_;
+  stereo_round_trip2_ = static_cast<float>(config_.stereoRoundTripDist2());
   align_.max_iterations = config_.max_iterations;
   align_.min_step_px = static_cast<float>(config_.min_step_px);
   align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);

@@ -72,6 +72,10 @@ struct FrontendConfig {
   // quantisation artefacts, so a correct stereo match returns less exactly than a temporal track
   // within one stream, whose P-frames carry the texture along the motion (configs/README.md).
   double stereo_max_recovered_dist2_px2 = 0.0;
+  // The left-right match's tolerance in effect (squared px).
+  double stereoRoundTripDist2() const {
+    return stereo_max_recovered_dist2_px2 > 0.0 ? stereo_max_recovered_dist2_px2 : max_recovered_dist2_px2;
+  }
   double epipolar_error = 0.005;  // |f0^T E f1| on unit bearings
   StereoGuess matching_guess = StereoGuess::kFixedDepth;
   double matching_default_depth_m = 2.0;
