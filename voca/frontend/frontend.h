@@ -224,11 +224,11 @@ class KltFrontend {
   const PatchPattern* pattern_ = nullptr;
   AlignParams align_;
   int num_levels_ = 0;
-  int prior_levels_ = 0;  // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
-  int backward_levels_ = 0;
+  int prior_levels_ = 0;     // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
+  int backward_levels_ = 0;  // at most this many levels in a round-trip check (backward_pyramid_levels + 1)
   // Round-trip tolerances (squared px): a temporal track's, and the left-to-right match's.
   float temporal_round_trip2_ = 0.f;
-  float stereo_round_trip2_ = 0.f;  // at most this many levels in a round-trip check (backward_pyramid_levels + 1)
+  float stereo_round_trip2_ = 0.f;
   int max_points_ = 0;
   int width_ = 0, height_ = 0;
   std::array<GenericCamera<double>, 2> cameras_model_;
