@@ -60,6 +60,8 @@ TEST_CASE("backend bench: three runs time the same work as one and report each r
   CHECK(thrice.resets == once.resets);
   CHECK(thrice.mean_lm_iterations == once.mean_lm_iterations);
   CHECK(thrice.mean_linearizations == once.mean_linearizations);
+  CHECK(thrice.mean_cost_passes == once.mean_cost_passes);
+  CHECK(thrice.mean_cost_passes > 0.0);  // every frame that converges judges its last step by one
   CHECK(thrice.mean_inliers == once.mean_inliers);
 
   CHECK_THROWS_AS(voca::pipeline::timeEstimator(seq.frames, *rig, config, kWarmup, 0), voca::InputError);

@@ -46,7 +46,8 @@ namespace {
 // the estimates' counts and sums (the caller forms the means, and compares runs by them).
 struct RunStatistics {
   int resets = 0, keyframes = 0;
-  double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0, pose_iterations = 0.0;
+  double window = 0.0, points = 0.0, inliers = 0.0, iterations = 0.0, linearizations = 0.0, cost_passes = 0.0,
+         pose_iterations = 0.0;
   bool operator==(const RunStatistics&) const = default;
 };
 
@@ -68,6 +69,7 @@ RunStatistics runEstimatorOnce(const std::vector<TrackedStereoFrame>& frames, co
     stats.inliers += estimate.num_inliers;
     stats.iterations += estimate.lm_iterations;
     stats.linearizations += estimate.lm_linearizations;
+    stats.cost_passes += estimate.lm_cost_passes;
     stats.pose_iterations += estimate.pose_iterations;
   }
   return stats;
@@ -111,6 +113,7 @@ EstimatorTiming timeEstimator(const std::vector<TrackedStereoFrame>& frames, con
   timing.mean_inliers = stats.inliers / n;
   timing.mean_lm_iterations = stats.iterations / n;
   timing.mean_linearizations = stats.linearizations / n;
+  timing.mean_cost_passes = stats.cost_passes / n;
   timing.mean_pose_iterations = stats.pose_iterations / n;
   return timing;
 }

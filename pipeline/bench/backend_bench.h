@@ -40,7 +40,7 @@ struct EstimatorTiming {
   double mean_window_keyframes = 0.0, mean_left_points = 0.0, mean_inliers = 0.0;
   // LM iterations of the window optimisation per measured frame: the time's main factor, and free of
   // the noise a shared machine puts on the clock.
-  double mean_lm_iterations = 0.0, mean_linearizations = 0.0, mean_pose_iterations = 0.0;
+  double mean_lm_iterations = 0.0, mean_linearizations = 0.0, mean_cost_passes = 0.0, mean_pose_iterations = 0.0;
 };
 
 // Feeds the frames to a new estimator in order and times each process() call; frames before

@@ -52,8 +52,9 @@ void printTiming(const pipeline::EstimatorTiming& t) {
   fmt::print("  tracked points per frame {:.0f} (left), inlier observations per frame {:.0f}\n", t.mean_left_points,
              t.mean_inliers);
   fmt::print(
-      "  LM iterations per frame {:.2f}, window linearisations per frame {:.2f}, pose-only steps per frame {:.2f}\n",
-      t.mean_lm_iterations, t.mean_linearizations, t.mean_pose_iterations);
+      "  LM iterations per frame {:.2f}, window linearisations per frame {:.2f}, cost passes per frame {:.2f}, "
+      "pose-only steps per frame {:.2f}\n",
+      t.mean_lm_iterations, t.mean_linearizations, t.mean_cost_passes, t.mean_pose_iterations);
   fmt::print("  CPU time per frame{}: median {:.3f} ms, p90 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms\n",
              t.run_median_ms.size() > 1 ? fmt::format(" (each frame's median of {} runs)", t.run_median_ms.size()) : "",
              median, quantile(t.cpu_ms, 0.9), p99, quantile(t.cpu_ms, 1.0));

@@ -387,6 +387,7 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   }
   est.lm_iterations = optimizer_.optimize(state(), config_.max_iterations, true);
   est.lm_linearizations = optimizer_.linearizations();
+  est.lm_cost_passes = optimizer_.costPasses();
 
   frameStats(n, est);
   const SE3d& T_w_c = window_[n].T_w_c;

@@ -57,6 +57,7 @@ struct PoseEstimate {
   int pose_iterations = 0;  // robust steps on this frame's pose alone, before the window
   int lm_iterations = 0;
   int lm_linearizations = 0;         // of the window, in those iterations
+  int lm_cost_passes = 0;            // of the window without Jacobians, judging steps expected to converge
   double rms_reprojection_px = 0.0;  // this frame's inliers
   double mean_depth_m = 0.0;         // of the landmarks this frame observes (0 when none)
   double time_ms = 0.0;

@@ -96,6 +96,9 @@ class WindowOptimizer {
   int optimize(const WindowState& state, int max_iterations, bool filter);
   // Linearisations (passes over the residuals with Jacobians) of the last optimize(): most of its time.
   int linearizations() const { return linearizations_; }
+  // Cost passes (residuals without Jacobians) of the last optimize(), each judging a step expected to
+  // converge.
+  int costPasses() const { return cost_passes_; }
   // Removes observations off by more than the outlier threshold; landmarks whose host view is an
   // outlier, that keep too few views or whose depth left the valid range die. Returns the number of
   // observations removed (those of dead landmarks included).
@@ -156,6 +159,7 @@ class WindowOptimizer {
   std::vector<LandmarkLin> lin_;  // by position in the landmark list of the last linearize()
   std::vector<Mat63> H_pl_;
   int linearizations_ = 0;
+  int cost_passes_ = 0;
   std::vector<std::uint32_t> outliers_;  // cost(state, outliers_.data()) before the filter
   // J_host^T W J_host and J_host^T W r summed per (host, target) frame pair, at host * slots + target;
   // valid where the host's bit mask in targets_of_host_ has the target.
