@@ -32,13 +32,17 @@ namespace {
 // Thrown out of the encoder's progress callback when a stop is requested during --encode.
 struct EncodeInterrupted {};
 
+// The looser end of the stereo round trip (squared px) that the starved-right-camera hint suggests;
+// a config already at or above it gets no hint.
+constexpr double kHintedStereoRoundTripDist2 = 0.5;
+
 // Progress on stderr: a line every few frames, and one per frame that was not tracked.
 class ProgressSink final : public FrameSink {
  public:
   // suggest_flow_retry: retry_previous_flow does not act on this input, so a failure where the
   // temporal step lost most points gets a hint at that key, once. suggest_stereo_tolerance: the
-  // left-right match's round trip is tighter than the hint's 0.5-1 px^2, so a failure where the right
-  // camera holds few of the left camera's points gets a hint at stereo_max_recovered_dist2_px2, once.
+  // left-right match's round trip is tighter than the hint suggests (kHintedStereoRoundTripDist2), so a failure where
+  // the right camera holds few of the left camera's points gets a hint at stereo_max_recovered_dist2_px2, once.
   ProgressSink(std::int64_t total, bool estimate, int frontend_stage, int backend_stage, bool suggest_flow_retry,
                bool suggest_stereo_tolerance)
       : total_(total),
@@ -98,10 +102,10 @@ class ProgressSink final : public FrameSink {
     line_.message(
         "hint: the right camera holds {} of the left camera's {} points. On strongly compressed video the stereo "
         "matches fail their round trip (each camera's stream has its own artefacts): set "
-        "\"stereo_max_recovered_dist2_px2\" to 0.5-1 in the config's frontend section (configs/README.md). A "
+        "\"stereo_max_recovered_dist2_px2\" to {}-1 in the config's frontend section (configs/README.md). A "
         "stereo calibration that is off, or \"matching_default_depth_m\" far from the scene's depth, loses them "
         "too.",
-        f.num_right, f.num_left);
+        f.num_right, f.num_left, kHintedStereoRoundTripDist2);
   }
 
   // "12/300", or "12" for live input of unknown length.
@@ -339,9 +343,10 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   std::unique_ptr<ProgressSink> progress;
   if (options.progress) {
     const FrontendConfig& tracker = result.config.frontend;
-    progress = std::make_unique<ProgressSink>(
-        info.expected_frames, options.estimate, frontend_position, backend_position,
-        !appliesTo(tracker.retry_previous_flow, result.has_motion), tracker.stereoRoundTripDist2() < 0.5);
+    progress =
+        std::make_unique<ProgressSink>(info.expected_frames, options.estimate, frontend_position, backend_position,
+                                       !appliesTo(tracker.retry_previous_flow, result.has_motion),
+                                       tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
