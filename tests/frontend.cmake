@@ -1,4 +1,4 @@
-voca_add_test(test_frontend SOURCES test_frontend.cpp LIBS voca_frontend)
+voca_add_test(test_frontend SOURCES test_frontend.cpp LIBS voca_frontend Threads::Threads)
 voca_add_test(test_frontend_alloc SOURCES test_frontend_alloc.cpp LIBS voca_frontend)
 voca_add_test(test_frontend_config SOURCES test_frontend_config.cpp LIBS voca_formats_config LABELS asan)
 target_compile_definitions(test_frontend_config PRIVATE VOCA_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

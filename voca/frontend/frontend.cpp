@@ -86,6 +86,8 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
     for (auto* v : {&cam.flow_x, &cam.flow_y}) v->reserve(static_cast<std::size_t>(max_points_));
     cam.traces.reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&cam.guess_dist_plain_px, &cam.guess_dist_prior_px})
+      v->reserve(static_cast<std::size_t>(max_points_));
     cam.retry_candidates.reserve(static_cast<std::size_t>(max_points_));
     // Live points plus two scratch slots (the plain and the prior backward track of one point).
     cam.num_levels = num_levels_;
@@ -270,6 +272,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   cam.next_points.clear();
   cam.next_slots.clear();
   cam.traces.clear();
+  cam.guess_dist_plain_px.clear();
+  cam.guess_dist_prior_px.clear();
   ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
   const int all_levels = num_levels_;
@@ -423,9 +427,9 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     cam.next_ids.push_back(cam.ids[i]);
     cam.next_points.push_back(result);
     cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
-    countKept(cam, ts, result, trace, stats);
+    countKept(cam, ts, result, trace);
   }
-  const bool retry_lost_some = retryFromPreviousFlow(cam, ts, stats);
+  const bool retry_lost_some = retryFromPreviousFlow(cam, ts);
   std::swap(cam.ids, cam.next_ids);
   std::swap(cam.points, cam.next_points);
   std::swap(cam.slots, cam.next_slots);
@@ -445,7 +449,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
 }
 
 void KltFrontend::countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked,
-                            const PointTrace& trace, FrontendStats& stats) const {
+                            const PointTrace& trace) const {
   const Eigen::Vector2f p = trace.previous_px;
   ++ts.kept;
   if (retry_flow_) {
@@ -453,12 +457,12 @@ void KltFrontend::countKept(CameraState& cam, TemporalStats& ts, const Eigen::Ve
     cam.flow_y.push_back(tracked.y() - p.y());
   }
   if (trace.has_prior) {
-    stats.guess_dist_plain_px.push_back((tracked - p).norm());
-    stats.guess_dist_prior_px.push_back((tracked - trace.prior_px).norm());
+    cam.guess_dist_plain_px.push_back((tracked - p).norm());
+    cam.guess_dist_prior_px.push_back((tracked - trace.prior_px).norm());
   }
 }
 
-bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats) {
+bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts) {
   if (cam.retry_candidates.empty()) return false;
   // An ordinary frame loses a few points (they left the view, were occluded or changed); a turn
   // beyond the pyramid's reach loses most at once, and there the retry is the only way to keep the
@@ -490,7 +494,7 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, Fro
     ++ts.flow_retried;
     cam.next_points[candidate.next] = tracked;
     cam.next_slots[candidate.next] = slot;
-    countKept(cam, ts, tracked, trace, stats);
+    countKept(cam, ts, tracked, trace);
   }
   return any_lost;
 }
@@ -605,7 +609,14 @@ void KltFrontend::filterEpipolar(FrontendStats& stats) {
 }
 
 void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
-  const auto start = std::chrono::steady_clock::now();
+  beginFrame(input, stats);
+  trackCamera(0, input, stats);
+  trackCamera(1, input, stats);
+  endFrame(input, out, stats);
+}
+
+void KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& stats) {
+  frame_start_ = std::chrono::steady_clock::now();
   for (int c = 0; c < 2; ++c) {
     const GrayImage& image = input.images[static_cast<std::size_t>(c)];
     if (image.width() != width_ || image.height() != height_) {
@@ -617,21 +628,31 @@ void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out
   stats.clear();
   stats.frame_index = input.frame_index;
   if (std::isfinite(input.depth_hint_m) && input.depth_hint_m > 0.0) average_depth_m_ = input.depth_hint_m;
-  const bool presmooth = appliesTo(config_.presmooth, input.decoded);
+  presmooth_ = appliesTo(config_.presmooth, input.decoded);
   retry_flow_ = appliesTo(config_.retry_previous_flow, input.decoded);
-  for (int c = 0; c < 2; ++c) {
-    CameraState& cam = cameras_[static_cast<std::size_t>(c)];
-    cam.current = 1 - cam.current;
-    cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(c)].view(),
-                                                              presmooth);
+}
+
+void KltFrontend::trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
+  CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
+  cam.current = 1 - cam.current;
+  cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(camera)].view(),
+                                                            presmooth_);
+  if (have_previous_) {
+    trackTemporal(camera, priorField(camera, input, stats), stats);
+  } else {
+    priorField(camera, input, stats);  // remember a P-frame field for bridging
+    cam.traces.clear();
+    cam.guess_dist_plain_px.clear();
+    cam.guess_dist_prior_px.clear();
   }
-  for (int c = 0; c < 2; ++c) {
-    if (have_previous_) {
-      trackTemporal(c, priorField(c, input, stats), stats);
-    } else {
-      priorField(c, input, stats);  // remember a P-frame field for bridging
-      cameras_[static_cast<std::size_t>(c)].traces.clear();
-    }
+}
+
+void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
+  for (const CameraState& cam : cameras_) {
+    stats.guess_dist_plain_px.insert(stats.guess_dist_plain_px.end(), cam.guess_dist_plain_px.begin(),
+                                     cam.guess_dist_plain_px.end());
+    stats.guess_dist_prior_px.insert(stats.guess_dist_prior_px.end(), cam.guess_dist_prior_px.begin(),
+                                     cam.guess_dist_prior_px.end());
   }
   // Every track survived and the capacity is full: no point could be detected. Crowded tracks give
   // way (thin_when_full_px).
@@ -654,7 +675,7 @@ void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out
   }
   stats.num_left = static_cast<int>(out.observations[0].size());
   stats.num_right = static_cast<int>(out.observations[1].size());
-  stats.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start_).count();
 }
 
 }  // namespace voca

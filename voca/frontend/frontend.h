@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -40,6 +41,7 @@ struct TemporalStats {
   int consensus_rejections = 0;
   int distrusted = 0;       // vectors the codec-confidence checks rejected (counted in with_vector too)
   int prior_confirmed = 0;  // prior tracks not run: the vector landed near the plain track's result
+  bool operator==(const TemporalStats&) const = default;
 };
 
 // What one call of KltFrontend::track did.
@@ -87,6 +89,14 @@ class KltFrontend {
   // positive hint seen; the default depth until then). out carries the frame's t_ns, frame_index and
   // frames_missing_before.
   void track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
+  // track() in three steps, for a caller that tracks the two cameras on two threads: beginFrame,
+  // then trackCamera(0) and trackCamera(1), which touch disjoint state and may run concurrently
+  // (each builds its camera's pyramid and tracks its points into it), then endFrame (thinning,
+  // detection, stereo matching, the epipolar check, the output). The same results as track(), bit
+  // for bit, in either order of the two cameras.
+  void beginFrame(const DecodedStereoFrame& input, FrontendStats& stats);
+  void trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
+  void endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
   // Forgets every track (the next frame starts from detection).
   void reset();
 
@@ -128,6 +138,9 @@ class KltFrontend {
     // still holds its templates (slot).
     std::vector<RetryCandidate> retry_candidates;
     std::vector<PointTrace> traces;
+    // This frame's FrontendStats::guess_dist_* of this camera, appended to the stats by endFrame
+    // (left camera first): the cameras may be tracked concurrently.
+    std::vector<float> guess_dist_plain_px, guess_dist_prior_px;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
     std::span<PatchTemplate> slot(int index) {
@@ -207,11 +220,10 @@ class KltFrontend {
   void thinTracks(FrontendStats& stats);
   void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   // The statistics and the image flow of a point the temporal step kept at tracked.
-  void countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked, const PointTrace& trace,
-                 FrontendStats& stats) const;
+  void countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked, const PointTrace& trace) const;
   // retry_previous_flow on the points every guess lost, when they are enough of the frame's
   // (retry_min_lost_fraction); the others are lost and get slot -1. True when any was lost.
-  bool retryFromPreviousFlow(CameraState& cam, TemporalStats& ts, FrontendStats& stats);
+  bool retryFromPreviousFlow(CameraState& cam, TemporalStats& ts);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
@@ -250,6 +262,8 @@ class KltFrontend {
   std::uint64_t next_track_id_ = 1;
   bool have_previous_ = false;
   bool retry_flow_ = false;  // retry_previous_flow applies to the frame being tracked (its InputScope)
+  bool presmooth_ = false;   // presmooth applies to the frame being tracked
+  std::chrono::steady_clock::time_point frame_start_;  // when beginFrame started (FrontendStats::time_ms)
 };
 
 }  // namespace voca
