@@ -307,19 +307,22 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
     decode_per_frame = perFrame(counted_decode.tally);
   }
 
-  // The same through the runner with one thread per stage: the queues, slots and threads add nothing.
+  // The same through the runner with one thread per stage and the frontend's helper: the queues,
+  // slots and threads add nothing.
   WindowSink window;
   pipeline::VoRunOptions options;
   options.input = folder;
   options.progress = false;
   options.decoder = decode::DecoderKind::kSoftware;
   options.pipeline.threads = 0;
+  options.frontend_camera_threads = 2;  // the right camera on the frontend's helper thread
   options.extra_sinks = {&window};
   VideoFolderSource source(dataset);
   const pipeline::VoRunResult result = runVisualOdometryOn(source, rig, VocaConfig{}, options);
   REQUIRE_FALSE(result.pipeline.error);
   REQUIRE(result.frames == kFrames);
   CHECK(result.pipeline.threads == 5);
+  CHECK(result.frontend_camera_threads == 2);
   // Between frame kWarmup and the last frame leaving the pipeline, all threads together allocated only
   // FFmpeg's share: the queues, slots, threads and sinks add nothing.
   const long window_frames = kFrames - 1 - kWarmup;

@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "drivers/decode/demuxer.h"
 #include "drivers/source/dataset_source.h"
@@ -62,16 +63,21 @@ pipeline::VoRunOptions quietRun(const fs::path& input, const fs::path& trajector
   return options;
 }
 
-// Runs with one thread, two threads and one thread per stage; the three files must be identical.
+// Runs with one thread, two threads (the frontend's right camera on a helper), and one thread per
+// stage without and with the helper; the four files must be identical.
 void expectSameTrajectory(const std::string& name, pipeline::VoRunOptions options) {
   test::ScratchDir dir("pipeline-determinism");
   std::string reference;
-  for (const int threads : {1, 2, 0}) {
-    options.trajectory_file = dir / ("traj_" + std::to_string(threads) + ".txt");
+  const std::pair<int, int> layouts[] = {{1, 1}, {2, 2}, {0, 1}, {0, 2}};  // threads, frontend camera threads
+  for (const auto& [threads, camera_threads] : layouts) {
+    options.trajectory_file = dir / ("traj_" + std::to_string(threads) + "_" + std::to_string(camera_threads) + ".txt");
     options.pipeline.threads = threads;
+    options.frontend_camera_threads = camera_threads;
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    INFO(name << ", threads option " << threads << " (" << result.pipeline.threads << " threads)");
+    INFO(name << ", threads option " << threads << " (" << result.pipeline.threads << " threads), frontend on "
+              << camera_threads);
     REQUIRE_FALSE(result.pipeline.error);
+    CHECK(result.frontend_camera_threads == camera_threads);
     CHECK(result.pipeline.dropped == 0);
     CHECK(result.frames == result.pipeline.produced);
     const std::string text = fileText(options.trajectory_file);
@@ -159,6 +165,22 @@ TEST_CASE("pipeline e2e: pipelined runs write the single-threaded trajectory byt
     if (!data) return;
     expectSameTrajectory("KITTI 06", quietRun(*data, {}, 1));
   }
+}
+
+TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2 and names anything else; the run says what it used") {
+  test::ScratchDir dir("pipeline-frontend-threads");
+  const std::string run = "run " + rendered().video.string() + " --frames 12 -o " + (dir / "traj.txt").string();
+  const test::CommandOutput bad = test::runVocaOutput(run + " --frontend-threads 3");
+  INFO(bad.text);
+  CHECK(bad.exit_code == 1);
+  CHECK(bad.text.find("--frontend-threads: expected auto, 1 or 2, got \"3\"") != std::string::npos);
+  const test::CommandOutput helped = test::runVocaOutput(run + " --frontend-threads 2");
+  INFO(helped.text);
+  CHECK(helped.exit_code == 0);
+  CHECK(helped.text.find("(and a frontend helper tracking the right camera)") != std::string::npos);
+  const test::CommandOutput single = test::runVocaOutput(run + " --threads 1");
+  CHECK(single.exit_code == 0);
+  CHECK(single.text.find("frontend helper") == std::string::npos);  // auto: one thread runs everything
 }
 
 TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its input") {

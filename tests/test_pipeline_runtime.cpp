@@ -1,7 +1,8 @@
 // The staged runner on its own, with stand-in stages: every thread layout keeps every frame and its
 // order offline; the live policy's drops are exactly the frames missing downstream; a throwing stage
 // stops the run with its name and frame, finishes what was past it and never hangs; a stop request
-// drains; latency histograms and the Chrome trace agree.
+// drains; latency histograms and the Chrome trace agree; a stage's helper thread hands work back
+// and forth.
 
 #include <doctest/doctest.h>
 
@@ -16,6 +17,7 @@
 #include "pipeline/runtime/chrome_trace.h"
 #include "pipeline/runtime/latency_histogram.h"
 #include "pipeline/runtime/runner.h"
+#include "pipeline/runtime/stage_helper.h"
 #include "tests/test_support.h"
 
 using namespace voca;
@@ -327,6 +329,52 @@ TEST_CASE("pipeline: a pin the OS refuses is one warning and the run goes on") {
   CHECK(report.completed == 50);
   REQUIRE(report.warnings.size() == 1);
   CHECK(report.warnings[0].find("core 4095") != std::string::npos);
+}
+
+TEST_CASE("stage helper: runs its task once per request on its own thread, sees the caller's writes, rethrows") {
+  // The task reads what the caller wrote before request() and writes what the caller reads after
+  // wait(), with no atomics of its own: the handoff orders them (a missed order shows as a wrong sum).
+  std::vector<std::int64_t> input(64), output(64);
+  std::thread::id task_thread;
+  int runs = 0;
+  bool fail = false;
+  StageHelper helper("voca-test", [&] {
+    task_thread = std::this_thread::get_id();
+    ++runs;
+    if (fail) throw std::runtime_error("task failed on purpose");
+    for (std::size_t i = 0; i < input.size(); ++i) output[i] = 2 * input[i];
+  });
+  std::int64_t checked = 0;
+  for (std::int64_t round = 1; round <= 20000; ++round) {
+    for (std::size_t i = 0; i < input.size(); ++i) input[i] = round + static_cast<std::int64_t>(i);
+    helper.request();
+    helper.wait();
+    for (std::size_t i = 0; i < output.size(); ++i) checked += output[i] == 2 * (round + static_cast<std::int64_t>(i));
+  }
+  CHECK(runs == 20000);
+  CHECK(checked == 20000 * 64);
+  CHECK(task_thread != std::this_thread::get_id());
+  fail = true;
+  helper.request();
+  CHECK_THROWS_WITH_AS(helper.wait(), "task failed on purpose", std::runtime_error);
+  // The helper goes on after a failure.
+  fail = false;
+  helper.request();
+  helper.wait();
+  CHECK(runs == 20002);
+  CHECK(output[0] == 2 * (20000 + 0));
+}
+
+TEST_CASE("stage helper: destroyed with a request outstanding, it finishes the task first") {
+  std::atomic<int> finished{0};
+  {
+    StageHelper helper("voca-test", [&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      finished.fetch_add(1);
+    });
+    helper.request();
+  }
+  CHECK(finished.load() == 1);
 }
 
 TEST_CASE("latency histogram: exact below 128 ns, within 0.8 % above, exact extremes") {

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
+#include "voca/core/error.h"
+
 namespace voca::pipeline {
 
 struct DepthHintChannel::Impl {
@@ -26,8 +30,23 @@ bool DepthHintChannel::pop(std::int64_t n, const StageContext& context, double& 
 }
 
 FrontendStage::FrontendStage(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities,
-                             DepthHintChannel* hints, bool keep_left_traces)
-    : frontend_(config, rig, capacities), hints_(hints), keep_left_traces_(keep_left_traces) {}
+                             DepthHintChannel* hints, bool keep_left_traces, int camera_threads)
+    : frontend_(config, rig, capacities),
+      camera_threads_(camera_threads),
+      hints_(hints),
+      keep_left_traces_(keep_left_traces) {
+  if (camera_threads != 1 && camera_threads != 2) {
+    throw InputError(fmt::format("frontend: {} camera threads; 1 or 2", camera_threads));
+  }
+}
+
+void FrontendStage::start(const StageContext& context) {
+  context_ = &context;
+  if (camera_threads_ == 2 && helper_ == nullptr) {
+    helper_ = std::make_unique<StageHelper>("voca-frontend1",
+                                            [this] { frontend_.trackCamera(1, *helper_frame_, *helper_stats_); });
+  }
+}
 
 void FrontendStage::process(FrameSlot& slot, Emitter& out) {
   DecodedStereoFrame& frame = slot.frame;
@@ -41,7 +60,22 @@ void FrontendStage::process(FrameSlot& slot, Emitter& out) {
     return;
   }
   ++frames_;
-  frontend_.track(frame, slot.tracked, slot.frontend_stats);
+  if (helper_ == nullptr) {
+    frontend_.track(frame, slot.tracked, slot.frontend_stats);
+  } else {
+    frontend_.beginFrame(frame, slot.frontend_stats);
+    helper_frame_ = &frame;
+    helper_stats_ = &slot.frontend_stats;
+    helper_->request();
+    try {
+      frontend_.trackCamera(0, frame, slot.frontend_stats);
+    } catch (...) {
+      helper_->wait();  // the helper works on the same frontend: it must finish first
+      throw;
+    }
+    helper_->wait();
+    frontend_.endFrame(frame, slot.tracked, slot.frontend_stats);
+  }
   if (keep_left_traces_) {
     const auto traces = frontend_.traces(0);
     slot.left_traces.assign(traces.begin(), traces.end());

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "pipeline/runtime/stage.h"
+#include "pipeline/runtime/stage_helper.h"
 #include "voca/backend/estimator.h"
 #include "voca/calib/calibration.h"
 #include "voca/frontend/frontend.h"
@@ -33,17 +34,25 @@ class DepthHintChannel {
 
 class FrontendStage final : public Stage {
  public:
-  // hints: non-null when the config's stereo guess uses the backend's depth.
+  // hints: non-null when the config's stereo guess uses the backend's depth. camera_threads 2: the
+  // right camera is tracked on a helper thread while the stage's thread tracks the left one (the
+  // same results; the frontend's share of a frame's time shrinks by the right camera's part).
   FrontendStage(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities,
-                DepthHintChannel* hints, bool keep_left_traces);
+                DepthHintChannel* hints, bool keep_left_traces, int camera_threads = 1);
   std::string_view name() const override { return "frontend"; }
   bool canSkipInput() const override { return true; }
   int relativeCost() const override { return 4; }
-  void start(const StageContext& context) override { context_ = &context; }
+  // Starts the helper thread, if any, from the stage's thread: it shares its scheduling class.
+  void start(const StageContext& context) override;
   void process(FrameSlot& slot, Emitter& out) override;
 
  private:
   KltFrontend frontend_;
+  int camera_threads_;
+  std::unique_ptr<StageHelper> helper_;
+  // The frame the helper tracks the right camera of, set before each request.
+  const DecodedStereoFrame* helper_frame_ = nullptr;
+  FrontendStats* helper_stats_ = nullptr;
   DepthHintChannel* hints_;
   bool keep_left_traces_;
   const StageContext* context_ = nullptr;

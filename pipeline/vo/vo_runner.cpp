@@ -22,6 +22,7 @@
 #include "pipeline/stages/source_stage.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/realtime/stop_signal.h"
+#include "platform/realtime/thread_control.h"
 #include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 
@@ -196,6 +197,18 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   return run;
 }
 
+// VoRunOptions::frontend_camera_threads resolved. A helper thread pays only when another core is
+// free to run it; a layout with pinned stages is the user's, and gets no thread it did not ask for.
+int frontendCameraThreads(const VoRunOptions& options) {
+  const int requested = options.frontend_camera_threads;
+  if (requested < 0 || requested > 2) {
+    throw InputError(fmt::format("frontend camera threads: expected 1 or 2 (0 = automatic), got {}", requested));
+  }
+  if (requested != 0) return requested;
+  const bool staged = options.pipeline.threads != 1;
+  return staged && options.pipeline.pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
+}
+
 }  // namespace
 
 VoRunResult runVisualOdometry(const VoRunOptions& options) {
@@ -308,8 +321,9 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   }
   const bool uses_depth = options.estimate && result.config.frontend.matching_guess == StereoGuess::kAverageDepth;
   DepthHintChannel hints;
+  result.frontend_camera_threads = frontendCameraThreads(options);
   FrontendStage frontend(result.config.frontend, rig, {.max_points = options.max_points}, uses_depth ? &hints : nullptr,
-                         !options.overlay_file.empty());
+                         !options.overlay_file.empty(), result.frontend_camera_threads);
   chain.push_back(&frontend);
   const int frontend_position = static_cast<int>(chain.size());
   std::unique_ptr<BackendStage> backend;
@@ -416,8 +430,9 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
                ms(frontend->service.quantileNs(0.99)), ms(backend->service.quantileNs(0.5)),
                backend->service.meanNs() * 1e-6, ms(backend->service.quantileNs(0.99)));
   }
-  fmt::print(out, "pipeline: {} thread{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
+  fmt::print(out, "pipeline: {} thread{}{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
              r.pipeline.threads == 1 ? "" : "s",
+             r.frontend_camera_threads > 1 ? " (and a frontend helper tracking the right camera)" : "",
              r.pipeline.wall_s > 0.0 ? static_cast<double>(r.pipeline.completed) / r.pipeline.wall_s : 0.0,
              r.pipeline.wall_s);
   if (r.pipeline.dropped > 0 || r.pipeline.damaged > 0) {
@@ -593,6 +608,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
     }
   }
   j["pipeline"] = {{"threads", p.threads},
+                   {"frontend_camera_threads", r.frontend_camera_threads},
                    {"wall_s", p.wall_s},
                    {"frames_per_s", p.wall_s > 0 ? static_cast<double>(p.completed) / p.wall_s : 0.0},
                    {"produced", p.produced},

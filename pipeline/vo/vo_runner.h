@@ -59,6 +59,10 @@ struct VoRunOptions {
   double speed = 1.0;        // realtime playback speed
   bool strict = false;       // stop at the first damaged frame instead of skipping it
   bool progress = true;      // progress lines on stderr
+  // Threads the frontend tracks the two cameras on: 1, or 2 (the right camera on a helper thread;
+  // the same results). 0: 2 when the stages have threads of their own (pipeline.threads != 1), no
+  // stage is pinned, and the process may use two cores or more; else 1.
+  int frontend_camera_threads = 0;
 };
 
 struct VoRunResult {
@@ -74,9 +78,10 @@ struct VoRunResult {
   FrontendTotals frontend;
   BackendTotals backend;
   std::vector<FrameRecord> rows;
-  RunReport pipeline;              // per-stage latency, queues, drops, damaged frames, error
-  std::string source_end;          // live input: why it ended ("no data for 3 s"), empty otherwise
-  std::optional<EvalReport> eval;  // when there is ground truth
+  RunReport pipeline;               // per-stage latency, queues, drops, damaged frames, error
+  int frontend_camera_threads = 1;  // as resolved from VoRunOptions::frontend_camera_threads
+  std::string source_end;           // live input: why it ended ("no data for 3 s"), empty otherwise
+  std::optional<EvalReport> eval;   // when there is ground truth
   std::string ground_truth;
   SourceCounters source;  // frames the live source lost or could not pair
   int stop_signal = 0;    // the signal that stopped the run early (0: none)

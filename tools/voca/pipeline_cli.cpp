@@ -14,6 +14,10 @@ void addPipelineOptions(CLI::App& app, PipelineCli& cli) {
   app.add_option("--threads", cli.threads,
                  "Threads: auto (one per stage), 1 (every stage in one thread), or N (stages grouped in order)")
       ->capture_default_str();
+  app.add_option("--frontend-threads", cli.frontend_threads,
+                 "Threads the frontend tracks the two cameras on: auto (2 when the stages have threads of their\n"
+                 "own, no --pin, and two or more cores), 1, or 2 (the right camera on a helper thread; same results)")
+      ->capture_default_str();
   app.add_option("--pin", cli.pin,
                  "Stage-to-core map, e.g. decode:0,frontend:0,backend:1 (stages: read, decode, "
                  "frontend, backend, write)");
@@ -47,6 +51,13 @@ void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& option
     }
     options.pipeline.threads = threads;
   }
+  if (cli.frontend_threads == "auto") {
+    options.frontend_camera_threads = 0;
+  } else if (cli.frontend_threads == "1" || cli.frontend_threads == "2") {
+    options.frontend_camera_threads = cli.frontend_threads[0] - '0';
+  } else {
+    throw InputError(fmt::format("--frontend-threads: expected auto, 1 or 2, got \"{}\"", cli.frontend_threads));
+  }
   if (!cli.pin.empty()) options.pipeline.pins = pipeline::parseStagePins(cli.pin);
   const auto scheduling = platform::parseSchedulingPolicy(cli.scheduling);
   if (!scheduling) throw InputError(fmt::format("--sched: expected other, fifo or rr, got \"{}\"", cli.scheduling));
@@ -69,7 +80,9 @@ void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& option
 std::string pipelineHelpFooter() {
   return "Pipeline: read -> decode (video input) -> frontend -> backend -> write, each stage on its own thread by\n"
          "default, connected by bounded lock-free queues; --threads 1 runs them all in one thread and writes a\n"
-         "byte-identical trajectory. --pin maps stages to cores (as taskset counts them); --sched fifo|rr with\n"
+         "byte-identical trajectory. With threads per stage the frontend tracks the right camera on a helper\n"
+         "thread while it tracks the left one (--frontend-threads). --pin maps stages to cores (as taskset\n"
+         "counts them); --sched fifo|rr with\n"
          "--priority and --mlock need CAP_SYS_NICE / a memlock limit, and warn once and go on when refused.\n"
          "Offline replay never drops a frame; --realtime paces the input at its timestamps and drops the\n"
          "oldest waiting frame when the frontend falls behind (every drop is counted and listed).\n"

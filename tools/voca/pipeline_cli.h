@@ -12,6 +12,7 @@ namespace voca::cli {
 
 struct PipelineCli {
   std::string threads = "auto";
+  std::string frontend_threads = "auto";
   std::string pin;
   std::string scheduling = "other";
   int priority = 50;
