@@ -381,8 +381,9 @@ struct PlaneSequence {
   double disparity = kFocal * kBaseline / kDepth;
   GrayImage left, right;
 
-  void render(int frame) {
-    const Eigen::Vector2d shift = flow * frame;
+  void render(int frame) { renderAt(flow * frame); }
+  // Both images with the plane moved by `shift` pixels.
+  void renderAt(const Eigen::Vector2d& shift) {
     texture.render(left, kWidth, kHeight, shift.x(), shift.y());
     texture.render(right, kWidth, kHeight, shift.x() - disparity, shift.y());
   }
@@ -1289,8 +1290,7 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
     Eigen::Vector2d position = Eigen::Vector2d::Zero();
     for (int k = 0; k < 6; ++k) {
       position += k * seq.flow;
-      seq.texture.render(seq.left, seq.kWidth, seq.kHeight, position.x(), position.y());
-      seq.texture.render(seq.right, seq.kWidth, seq.kHeight, position.x() - seq.disparity, position.y());
+      seq.renderAt(position);
       DecodedStereoFrame in = seq.input(k);
       in.motion = {field, field};
       in.has_motion = true;

@@ -197,14 +197,11 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   return run;
 }
 
-// VoRunOptions::frontend_camera_threads resolved. A helper thread pays only when another core is
-// free to run it; a layout with pinned stages is the user's, and gets no thread it did not ask for.
+// VoRunOptions::frontend_camera_threads resolved (FrontendStage checks a value given). A helper
+// thread pays only when another core is free to run it; a layout with pinned stages is the user's,
+// and gets no thread it did not ask for.
 int frontendCameraThreads(const VoRunOptions& options) {
-  const int requested = options.frontend_camera_threads;
-  if (requested < 0 || requested > 2) {
-    throw InputError(fmt::format("frontend camera threads: expected 1 or 2 (0 = automatic), got {}", requested));
-  }
-  if (requested != 0) return requested;
+  if (options.frontend_camera_threads != 0) return options.frontend_camera_threads;
   const bool staged = options.pipeline.threads != 1;
   return staged && options.pipeline.pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
 }

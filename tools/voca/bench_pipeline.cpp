@@ -116,7 +116,8 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
   fmt::print("offline throughput, decode included (median of {} runs, wall clock):\n", opts.repeat);
   for (const Layout& layout : layouts) {
     fmt::print("  {:<32} {:7.1f} stereo frames/s  ({} threads; peak RSS {:.0f} MiB)\n", layout.label,
-               voca::median(layout.fps), layout.last.pipeline.threads + layout.camera_threads - 1, layout.rss);
+               voca::median(layout.fps), layout.last.pipeline.threads + layout.last.frontend_camera_threads - 1,
+               layout.rss);
   }
   const double single = std::max(voca::median(layouts[0].fps), 1e-9);
   fmt::print(

@@ -271,9 +271,6 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
   cam.next_ids.clear();
   cam.next_points.clear();
   cam.next_slots.clear();
-  cam.traces.clear();
-  cam.guess_dist_plain_px.clear();
-  cam.guess_dist_prior_px.clear();
   ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
   const int all_levels = num_levels_;
@@ -637,13 +634,13 @@ void KltFrontend::trackCamera(int camera, const DecodedStereoFrame& input, Front
   cam.current = 1 - cam.current;
   cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(camera)].view(),
                                                             presmooth_);
+  cam.traces.clear();
+  cam.guess_dist_plain_px.clear();
+  cam.guess_dist_prior_px.clear();
   if (have_previous_) {
     trackTemporal(camera, priorField(camera, input, stats), stats);
   } else {
     priorField(camera, input, stats);  // remember a P-frame field for bridging
-    cam.traces.clear();
-    cam.guess_dist_plain_px.clear();
-    cam.guess_dist_prior_px.clear();
   }
 }
 
