@@ -307,8 +307,8 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
     decode_per_frame = perFrame(counted_decode.tally);
   }
 
-  // The same through the runner with one thread per stage and the frontend's helper: the queues,
-  // slots and threads add nothing.
+  // The same through the runner with one thread per stage and the frontend's helper, writing the
+  // Chrome trace: the queues, slots, threads and the trace's per-frame events add nothing.
   WindowSink window;
   pipeline::VoRunOptions options;
   options.input = folder;
@@ -317,6 +317,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
   options.pipeline.threads = 0;
   options.frontend_camera_threads = 2;  // the right camera on the frontend's helper thread
   options.extra_sinks = {&window};
+  options.pipeline.trace_path = dir / "trace.json";
   VideoFolderSource source(dataset);
   const pipeline::VoRunResult result = runVisualOdometryOn(source, rig, VocaConfig{}, options);
   REQUIRE_FALSE(result.pipeline.error);
@@ -329,6 +330,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
   MESSAGE("pipelined: " << window.total << " allocations over " << window_frames << " frames, " << window.ffmpeg
                         << " of them FFmpeg's");
   CHECK(window.total == window.ffmpeg);
+  CHECK(result.pipeline.stages[2].helper_service.count() == kFrames);  // the trace had helper slices to write
   // Up to a pool's worth of frames (8) may be read and decoded ahead at either end of the window.
   CHECK(static_cast<double>(window.ffmpeg) >= (read_per_frame + decode_per_frame) * (window_frames - 8));
   CHECK(static_cast<double>(window.ffmpeg) <= (read_per_frame + decode_per_frame) * (window_frames + 8));

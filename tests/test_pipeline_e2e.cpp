@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -167,7 +168,7 @@ TEST_CASE("pipeline e2e: pipelined runs write the single-threaded trajectory byt
   }
 }
 
-TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2 and names anything else; the run says what it used") {
+TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2, names anything else; the helper pins and traces") {
   test::ScratchDir dir("pipeline-frontend-threads");
   const std::string run = "run " + rendered().video.string() + " --frames 12 -o " + (dir / "traj.txt").string();
   const test::CommandOutput bad = test::runVocaOutput(run + " --frontend-threads 3");
@@ -181,6 +182,35 @@ TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2 and names anythin
   const test::CommandOutput single = test::runVocaOutput(run + " --threads 1");
   CHECK(single.exit_code == 0);
   CHECK(single.text.find("frontend helper") == std::string::npos);  // auto: one thread runs everything
+
+  // The helper's own pin asks for it (auto) and is kept when refused; its slices are in the trace.
+  const test::CommandOutput pinned =
+      test::runVocaOutput(run + " --pin frontend.helper:4095 --trace " + (dir / "trace.json").string() + " --stats " +
+                          (dir / "stats.json").string());
+  INFO(pinned.text);
+  CHECK(pinned.exit_code == 0);
+  CHECK(pinned.text.find("(and a frontend helper tracking the right camera)") != std::string::npos);
+  CHECK(pinned.text.find("warning: thread 2 (frontend helper): core 4095") != std::string::npos);
+  const std::string trace = fileText(dir / "trace.json");
+  std::size_t helper_slices = 0;
+  for (std::size_t at = trace.find("\"cat\":\"helper\""); at != std::string::npos;
+       at = trace.find("\"cat\":\"helper\"", at + 1)) {
+    ++helper_slices;
+  }
+  CHECK(helper_slices == 12);
+  const nlohmann::json stats = nlohmann::json::parse(fileText(dir / "stats.json"));
+  bool helper_row = false;
+  for (const nlohmann::json& stage : stats.at("pipeline").at("stages")) {
+    if (!stage.contains("helper")) continue;
+    helper_row = true;
+    CHECK(stage.at("name") == "frontend");
+    CHECK(stage.at("helper").at("core") == 4095);
+    CHECK(stage.at("helper").at("cpu").at("count") == 12);
+  }
+  CHECK(helper_row);
+  const test::CommandOutput no_helper = test::runVocaOutput(run + " --frontend-threads 1 --pin frontend.helper:0");
+  CHECK(no_helper.exit_code == 1);
+  CHECK(no_helper.text.find("pin: frontend.helper: the frontend stage runs no helper thread") != std::string::npos);
 }
 
 TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its input") {

@@ -6,9 +6,16 @@
 
 #include <doctest/doctest.h>
 
+#include <sched.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <stdexcept>
 #include <thread>
@@ -75,6 +82,46 @@ class DelayStage final : public Stage {
   std::int64_t throw_at_;
   std::int64_t seen_ = 0;
 };
+
+// A stage that does part of each frame on a StageHelper, as the frontend does with its right camera.
+class HelperStage final : public Stage {
+ public:
+  explicit HelperStage(std::string name) : name_(std::move(name)) {}
+  std::string_view name() const override { return name_; }
+  bool usesHelper() const override { return true; }
+  const StageHelper* helper() const override { return helper_.get(); }
+  void start(const StageContext& context) override {
+    helper_ = std::make_unique<StageHelper>(
+        "voca-test-helper", [] { spinFor(std::chrono::microseconds(150)); }, context.helperCore(name()));
+  }
+  void process(FrameSlot& slot, Emitter& out) override {
+    helper_->request();
+    spinFor(std::chrono::microseconds(100));
+    helper_->wait();
+    out.forward(slot);
+  }
+
+ private:
+  static void spinFor(std::chrono::microseconds duration) {
+    const auto until = std::chrono::steady_clock::now() + duration;
+    while (std::chrono::steady_clock::now() < until) {
+    }
+  }
+  std::string name_;
+  std::unique_ptr<StageHelper> helper_;
+};
+
+// The lowest core this process may run on.
+int firstAllowedCore() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  REQUIRE(sched_getaffinity(0, sizeof(set), &set) == 0);
+  for (int core = 0; core < CPU_SETSIZE; ++core) {
+    if (CPU_ISSET(core, &set)) return core;
+  }
+  FAIL("no core in the affinity mask");
+  return -1;
+}
 
 // Records the frame order it sees.
 class RecordingSink final : public Stage {
@@ -375,6 +422,112 @@ TEST_CASE("stage helper: destroyed with a request outstanding, it finishes the t
     helper.request();
   }
   CHECK(finished.load() == 1);
+}
+
+TEST_CASE("stage helper: times each run on its own thread's clock; a core it cannot have is a warning") {
+  StageHelper helper("voca-test", [] {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(3);
+    while (std::chrono::steady_clock::now() < until) {
+    }
+  });
+  CHECK(helper.pinWarning().empty());
+  helper.request();
+  helper.wait();
+  const StageTiming& run = helper.lastRun();
+  CHECK(run.end_ns - run.start_ns >= 3'000'000);
+  CHECK(run.cpu_ns > 0);
+  CHECK(run.cpu_ns <= run.end_ns - run.start_ns + 1'000'000);  // the thread's CPU clock, not the process's
+  StageHelper pinned(
+      "voca-test", [] {}, firstAllowedCore());
+  CHECK(pinned.pinWarning().empty());
+  StageHelper refused(
+      "voca-test", [] {}, 4095);  // no machine this runs on has that core
+  CHECK(refused.pinWarning().find("core 4095") != std::string::npos);
+  refused.request();  // and it still works, where it was created
+  refused.wait();
+  CHECK(refused.lastRun().end_ns >= refused.lastRun().start_ns);
+}
+
+TEST_CASE("pipeline: a stage's helper thread gets its own trace track and profile row, and a pin of its own") {
+  test::ScratchDir dir("pipeline-helper-trace");
+  CountingSource source(200);
+  DelayStage decode("decode", 30, 1);
+  HelperStage frontend("frontend");
+  RecordingSink sink;
+  PipelineOptions options;
+  options.trace_path = dir / "trace.json";
+  const int core = firstAllowedCore();
+  options.pins = {{"frontend.helper", core}};
+  Pipeline pipeline(source, {&decode, &frontend, &sink}, options);
+  const RunReport report = pipeline.run();
+  REQUIRE(report.completed == 200);
+  CHECK(report.warnings.empty());
+  REQUIRE(report.stages.size() == 4);
+  const StageReport& stage = report.stages[2];
+  CHECK(stage.helper_service.count() == 200);
+  CHECK(stage.helper_cpu.count() == 200);
+  CHECK(stage.helper_service.quantileNs(0.5) >= 150'000);
+  CHECK(stage.helper_core == core);
+  CHECK(stage.core == -1);  // the stage's own thread is not pinned by its helper's pin
+  CHECK(report.stages[1].helper_service.count() == 0);
+
+  // The trace reads back to the same helper rows, and every helper slice lies inside its frame's
+  // stage slice on a track of its own.
+  const RunReport read = readTraceReport(dir / "trace.json");
+  CHECK(read.stages[2].helper_core == core);
+  for (const double q : {0.5, 0.99, 1.0}) {
+    CHECK(read.stages[2].helper_service.quantileNs(q) == stage.helper_service.quantileNs(q));
+    CHECK(read.stages[2].helper_cpu.quantileNs(q) == stage.helper_cpu.quantileNs(q));
+  }
+  char* buffer = nullptr;
+  std::size_t size = 0;
+  std::FILE* out = open_memstream(&buffer, &size);
+  printLatencyReport(read, out);
+  std::fclose(out);
+  const std::string printed(buffer, size);
+  std::free(buffer);
+  CHECK(printed.find("+ helper") != std::string::npos);
+
+  std::ifstream in(dir / "trace.json");
+  const nlohmann::json events = nlohmann::json::parse(in);
+  std::map<std::int64_t, std::pair<double, double>> stage_span;  // frame -> frontend slice [ts, ts + dur]
+  std::vector<nlohmann::json> helper_slices;
+  int stage_tid = -1, helper_names = 0;
+  for (const nlohmann::json& e : events) {
+    if (e.value("cat", "") == "stage" && e.value("name", "") == "frontend") {
+      stage_tid = e.at("tid").get<int>();
+      const double ts = e.at("ts").get<double>();
+      stage_span[e.at("args").at("frame").get<std::int64_t>()] = {ts, ts + e.at("dur").get<double>()};
+    }
+    if (e.value("cat", "") == "helper") helper_slices.push_back(e);
+    if (e.value("name", "") == "thread_name" &&
+        e.at("args").at("name").get<std::string>() == "thread 2 helper: frontend")
+      ++helper_names;
+  }
+  CHECK(helper_names == 1);
+  REQUIRE(helper_slices.size() == 200);
+  int inside = 0;
+  for (const nlohmann::json& h : helper_slices) {
+    CHECK(h.at("tid").get<int>() != stage_tid);
+    const auto [begin, end] = stage_span.at(h.at("args").at("frame").get<std::int64_t>());
+    const double ts = h.at("ts").get<double>();
+    inside += ts >= begin && ts + h.at("dur").get<double>() <= end;
+  }
+  CHECK(inside == 200);
+
+  // A helper pin names a stage that runs one.
+  CountingSource again(5);
+  options.trace_path.clear();
+  options.pins = {{"decode.helper", core}};
+  test::expectError(test::inputErrorOf([&] {
+                      Pipeline(again, {&decode, &frontend, &sink}, options);
+                    }),
+                    "the decode stage runs no helper thread");
+  options.pins = {{"tracker.helper", core}};
+  test::expectError(test::inputErrorOf([&] {
+                      Pipeline(again, {&decode, &frontend, &sink}, options);
+                    }),
+                    "(stages: read, decode, frontend, frontend.helper, write)");
 }
 
 TEST_CASE("latency histogram: exact below 128 ns, within 0.8 % above, exact extremes") {

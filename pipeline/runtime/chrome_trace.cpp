@@ -55,6 +55,9 @@ const char* reasonName(ReleaseReason reason) {
   }
 }
 
+// Trace thread ids of stage helpers: this plus the stage's position (pipeline threads are 1, 2, ...).
+constexpr int kHelperTrackBase = 1001;
+
 // A trace time in microseconds back to integer nanoseconds.
 std::int64_t toNs(const nlohmann::json& value) {
   return static_cast<std::int64_t>(std::llround(value.get<double>() * 1000.0));
@@ -66,6 +69,7 @@ ChromeTraceWriter::ChromeTraceWriter(const std::filesystem::path& path, std::int
     : path_(path), origin_ns_(origin_ns) {
   file_ = std::fopen(path.c_str(), "w");
   if (file_ == nullptr) throw InputError(fmt::format("cannot write trace file {}", path.string()));
+  frame_text_.reserve(std::size_t{4} << 10);  // a frame of eight stages and a helper takes under 2 KB
   const std::string_view head =
       "[\n{\"name\":\"process_name\",\"ph\":\"M\",\"pid\":1,\"args\":{\"name\":\"voca pipeline\"}}";
   write(head.data(), head.size());
@@ -92,8 +96,8 @@ void ChromeTraceWriter::threadName(int thread, std::string_view name) {
 
 void ChromeTraceWriter::frame(const FrameSlot& slot, std::span<const std::string> stage_names,
                               std::span<const int> thread_of_stage) {
-  fmt::memory_buffer b;
-  auto out = std::back_inserter(b);
+  frame_text_.clear();
+  auto out = std::back_inserter(frame_text_);
   const std::int64_t index = slot.frameIndex();
   const std::size_t n = stage_names.size();
   for (std::size_t k = 0; k < n; ++k) {
@@ -105,6 +109,26 @@ void ChromeTraceWriter::frame(const FrameSlot& slot, std::span<const std::string
                    stage_names[k], thread_of_stage[k] + 1, Micros{t.start_ns - origin_ns_},
                    Micros{t.end_ns - t.start_ns}, index, k, Micros{wait}, Micros{t.cpu_ns});
   }
+  if (slot.helper_stage >= 0 && static_cast<std::size_t>(slot.helper_stage) < n) {
+    // The helper's track sorts right after its stage's thread (the same sort index, a larger id).
+    const auto k = static_cast<std::size_t>(slot.helper_stage);
+    const int tid = kHelperTrackBase + slot.helper_stage;
+    if (!helper_named_[k]) {
+      helper_named_[k] = true;
+      fmt::format_to(
+          out,
+          ",\n{{\"name\":\"thread_name\",\"ph\":\"M\",\"pid\":1,\"tid\":{},\"args\":{{\"name\":\"thread {} helper: "
+          "{}\"}}}}"
+          ",\n{{\"name\":\"thread_sort_index\",\"ph\":\"M\",\"pid\":1,\"tid\":{},\"args\":{{\"sort_index\":{}}}}}",
+          tid, thread_of_stage[k], stage_names[k], tid, thread_of_stage[k] + 1);
+    }
+    const StageTiming& h = slot.helper_timing;
+    fmt::format_to(out,
+                   ",\n{{\"name\":\"{} helper\",\"cat\":\"helper\",\"ph\":\"X\",\"pid\":1,\"tid\":{},\"ts\":{},"
+                   "\"dur\":{},\"args\":{{\"frame\":{},\"stage\":{},\"cpu_us\":{}}}}}",
+                   stage_names[k], tid, Micros{h.start_ns - origin_ns_}, Micros{h.end_ns - h.start_ns}, index, k,
+                   Micros{h.cpu_ns});
+  }
   // The whole frame as an async slice (its own lane in Perfetto), from arrival to the last stage.
   fmt::format_to(out,
                  ",\n{{\"name\":\"frame\",\"cat\":\"latency\",\"ph\":\"b\",\"id\":{},\"pid\":1,\"ts\":{},"
@@ -112,7 +136,7 @@ void ChromeTraceWriter::frame(const FrameSlot& slot, std::span<const std::string
                  ",\n{{\"name\":\"frame\",\"cat\":\"latency\",\"ph\":\"e\",\"id\":{},\"pid\":1,\"ts\":{}}}",
                  index, Micros{slot.arrival_ns - origin_ns_}, index, index,
                  Micros{slot.timing[n - 1].end_ns - origin_ns_});
-  write(b.data(), b.size());
+  write(frame_text_.data(), frame_text_.size());
   if (file_ != nullptr && !failed_ && std::fflush(file_) != 0) failed_ = true;
 }
 
@@ -133,6 +157,7 @@ void ChromeTraceWriter::close(const RunReport& report) {
     stages.push_back({{"name", s.name},
                       {"thread", s.thread},
                       {"core", s.core},
+                      {"helper_core", s.helper_core},
                       {"queue_high_water", s.queue_high_water},
                       {"dropped", s.dropped},
                       {"damaged", s.damaged}});
@@ -185,6 +210,11 @@ RunReport readTraceReport(const std::filesystem::path& path) {
         s.cpu.record(toNs(args.at("cpu_us")));
         if (args.at("stage").get<std::size_t>() > 0) s.wait.record(toNs(args.at("wait_us")));
         if (args.at("stage").get<std::size_t>() == 0) ++report.completed;
+      } else if (ph == "X" && cat == "helper") {
+        const nlohmann::json& args = e.at("args");
+        StageReport& s = stageAt(args.at("stage").get<std::size_t>(), "");
+        s.helper_service.record(toNs(e.at("dur")));
+        s.helper_cpu.record(toNs(args.at("cpu_us")));
       } else if (ph == "b" && cat == "latency") {
         frame_begin[e.at("id").get<std::int64_t>()] = toNs(e.at("ts"));
       } else if (ph == "e" && cat == "latency") {
@@ -214,6 +244,7 @@ RunReport readTraceReport(const std::filesystem::path& path) {
           StageReport& s = stageAt(k++, stage.at("name").get<std::string>());
           s.thread = stage.value("thread", s.thread);
           s.core = stage.value("core", -1);
+          s.helper_core = stage.value("helper_core", -1);
           s.queue_high_water = stage.value("queue_high_water", std::size_t{0});
           s.dropped = stage.value("dropped", std::int64_t{0});
           s.damaged = stage.value("damaged", std::int64_t{0});
@@ -241,6 +272,14 @@ void printLatencyReport(const RunReport& r, std::FILE* out) {
                ms(s.service.maxNs()), ms(s.wait.quantileNs(0.5)), ms(s.wait.quantileNs(0.99)),
                ms(s.cpu.quantileNs(0.5)), s.thread, s.core < 0 ? std::string("-") : std::to_string(s.core),
                s.queue_high_water, s.dropped + s.damaged);
+    if (s.helper_service.count() > 0) {
+      // The stage's helper thread, its part of each frame (it has no queue: the stage waits for it).
+      fmt::print(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   {:>7} {:>7} {:7.3f}   {:>6} {:>5}\n", "+ helper",
+                 ms(s.helper_service.quantileNs(0.5)), ms(s.helper_service.quantileNs(0.9)),
+                 ms(s.helper_service.quantileNs(0.99)), ms(s.helper_service.maxNs()), "", "",
+                 ms(s.helper_cpu.quantileNs(0.5)), s.thread,
+                 s.helper_core < 0 ? std::string("-") : std::to_string(s.helper_core));
+    }
   }
   const LatencyHistogram& e = r.end_to_end;
   fmt::print(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   (arrival to the end of the last stage)\n", "end-to-end",

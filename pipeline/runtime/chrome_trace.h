@@ -1,11 +1,13 @@
 #pragma once
 // The latency trace as a Chrome trace-event file (JSON array format; opens in Perfetto and
-// chrome://tracing): one track per pipeline thread with a slice per frame and stage, an async slice
+// chrome://tracing): one track per pipeline thread with a slice per frame and stage (and one per
+// stage helper thread, its slice of each frame's work beside the stage's), an async slice
 // per frame from arrival to the end of the last stage, an instant event per dropped or damaged
 // frame, and a closing summary event. Written as frames complete, one flush per frame, so a stopped
 // run leaves a readable file (the array format tolerates a missing closing bracket).
 // readTraceReport() reads such a file back into the same statistics the run printed.
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -26,7 +28,8 @@ class ChromeTraceWriter {
   ChromeTraceWriter& operator=(const ChromeTraceWriter&) = delete;
 
   void threadName(int thread, std::string_view name);
-  // A completed frame: one slice per stage (stage k ran on thread_of_stage[k]); does not allocate.
+  // A completed frame: one slice per stage (stage k ran on thread_of_stage[k]) and the stage helper's
+  // slice, if one ran; does not allocate.
   void frame(const FrameSlot& slot, std::span<const std::string> stage_names, std::span<const int> thread_of_stage);
   void released(const ReleasedFrame& frame, std::string_view stage_name);
   // The run's totals and queue high-water marks, then the closing bracket.
@@ -38,6 +41,8 @@ class ChromeTraceWriter {
   std::FILE* file_ = nullptr;
   std::int64_t origin_ns_ = 0;
   bool failed_ = false;
+  std::array<bool, kMaxStages> helper_named_{};  // whether a stage's helper track has its name yet
+  std::string frame_text_;                       // one frame's events, reused: its capacity is reserved once
 };
 
 // Reads a trace written by ChromeTraceWriter: per-stage service, wait and CPU histograms, end to end,

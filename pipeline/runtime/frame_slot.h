@@ -34,6 +34,9 @@ struct FrameSlot {
   std::int64_t sequence = 0;    // order in which the source produced the frame, from 0
   std::int64_t arrival_ns = 0;  // monotonic time the frame became available (captured, received or read)
   std::array<StageTiming, kMaxStages> timing{};
+  // The helper thread's run for this frame (Stage::helper), of stage helper_stage; -1: none ran.
+  StageTiming helper_timing{};
+  int helper_stage = -1;
 
   RawStereoFrame raw;           // raw sources; the encode stage's input
   EncodedStereoPacket encoded;  // video sources; the encode stage's output, the decode stage's input

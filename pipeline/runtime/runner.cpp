@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "pipeline/runtime/chrome_trace.h"
+#include "pipeline/runtime/stage_helper.h"
 #include "platform/realtime/clock.h"
 #include "voca/core/error.h"
 
@@ -89,6 +90,7 @@ struct Pipeline::Impl final : StageContext {
   std::vector<StageEmitter> emitters;
   std::vector<StageReport> reports;
   std::vector<std::string> names;
+  std::vector<int> helper_cores;      // per stage position: the core its helper thread is pinned to, -1: none
   std::atomic<int> failed_stage{-1};  // the furthest stage that failed; -1: none
   // Drop and damage records left to take, shared by the groups: usually one group does all the
   // dropping (the one with the frontend), so an even split per group would cut its list short.
@@ -108,6 +110,10 @@ struct Pipeline::Impl final : StageContext {
   int lastStage() const { return numStages() - 1; }
   bool aborting() const override { return failed_stage.load(std::memory_order_acquire) >= 0; }
   int maxHeldSlots() const override { return std::max(static_cast<int>(pool.size()) - 1, 0); }
+  int helperCore(std::string_view stage) const override {
+    const auto it = std::find(names.begin(), names.end(), stage);
+    return it == names.end() ? -1 : helper_cores[static_cast<std::size_t>(it - names.begin())];
+  }
 
   void fail(int stage, const FrameSlot* slot, const std::string& message) {
     if (!error_claimed.exchange(true)) {
@@ -181,6 +187,12 @@ struct Pipeline::Impl final : StageContext {
     StageTiming& t = slot.timing[static_cast<std::size_t>(stage)];
     t.end_ns = platform::monotonicNs();
     t.cpu_ns = platform::threadCpuNs() - t.cpu_start_ns;
+    if (stage > 0) {
+      if (const StageHelper* helper = stages[static_cast<std::size_t>(stage - 1)]->helper()) {
+        slot.helper_timing = helper->lastRun();
+        slot.helper_stage = stage;
+      }
+    }
     ++reports[static_cast<std::size_t>(stage)].forwarded;
     slot.owner_stage = -1;
     if (stage == lastStage()) {
@@ -206,6 +218,10 @@ struct Pipeline::Impl final : StageContext {
       r.service.record(t.end_ns - t.start_ns);
       r.cpu.record(t.cpu_ns);
       if (k > 0) r.wait.record(t.start_ns - slot.timing[static_cast<std::size_t>(k - 1)].end_ns);
+      if (slot.helper_stage == k) {
+        r.helper_service.record(slot.helper_timing.end_ns - slot.helper_timing.start_ns);
+        r.helper_cpu.record(slot.helper_timing.cpu_ns);
+      }
     }
     report.end_to_end.record(slot.timing[static_cast<std::size_t>(lastStage())].end_ns - slot.arrival_ns);
     ++report.completed;
@@ -242,7 +258,12 @@ struct Pipeline::Impl final : StageContext {
         if (k == 0) {
           source.start(*this);
         } else {
-          stages[static_cast<std::size_t>(k - 1)]->start(*this);
+          Stage& stage = *stages[static_cast<std::size_t>(k - 1)];
+          stage.start(*this);
+          if (const StageHelper* helper = stage.helper(); helper != nullptr && !helper->pinWarning().empty()) {
+            warn(fmt::format("thread {} ({} helper): {}", index, names[static_cast<std::size_t>(k)],
+                             helper->pinWarning()));
+          }
         }
       } catch (const std::exception& e) {
         fail(k, nullptr, e.what());
@@ -269,6 +290,7 @@ struct Pipeline::Impl final : StageContext {
       t.cpu_start_ns = platform::threadCpuNs();
       slot->owner_stage = 0;
       slot->arrival_ns = 0;
+      slot->helper_stage = -1;
       Produced produced = Produced::kEnd;
       try {
         produced = source.produce(*slot);
@@ -343,14 +365,30 @@ struct Pipeline::Impl final : StageContext {
       if (k == 0 || group_of[static_cast<std::size_t>(k - 1)] != group_of[static_cast<std::size_t>(k)]) g.first = k;
       g.last = k;
     }
+    helper_cores.assign(static_cast<std::size_t>(n), -1);
     for (const auto& [name, core] : options.pins) {
-      const auto it = std::find(names.begin(), names.end(), name);
+      // "<stage>.helper" names the helper thread of a stage that runs one.
+      constexpr std::string_view kHelperSuffix = ".helper";
+      const bool for_helper = name.ends_with(kHelperSuffix);
+      const std::string stage_name = for_helper ? name.substr(0, name.size() - kHelperSuffix.size()) : name;
+      const auto it = std::find(names.begin(), names.end(), stage_name);
       if (it == names.end()) {
         std::string known;
-        for (const std::string& s : names) known += (known.empty() ? "" : ", ") + s;
+        for (std::size_t k = 0; k < names.size(); ++k) {
+          known += (known.empty() ? "" : ", ") + names[k];
+          if (k > 0 && stages[k - 1]->usesHelper()) known += ", " + names[k] + std::string(kHelperSuffix);
+        }
         throw InputError(fmt::format("pin: no stage named \"{}\" in this pipeline (stages: {})", name, known));
       }
       if (core < 0) throw InputError(fmt::format("pin: {}: core must be 0 or more, got {}", name, core));
+      const auto position = static_cast<std::size_t>(it - names.begin());
+      if (for_helper) {
+        if (position == 0 || !stages[position - 1]->usesHelper()) {
+          throw InputError(fmt::format("pin: {}: the {} stage runs no helper thread in this run", name, stage_name));
+        }
+        helper_cores[position] = core;
+        continue;
+      }
       Group& g = groups[static_cast<std::size_t>(group_of[static_cast<std::size_t>(it - names.begin())])];
       if (g.core >= 0 && g.core != core) {
         throw InputError(fmt::format(
@@ -417,6 +455,7 @@ Pipeline::Pipeline(SourceStage& source, std::vector<Stage*> stages, PipelineOpti
     r.name = d.names[static_cast<std::size_t>(k)];
     r.thread = d.group_of[static_cast<std::size_t>(k)];
     r.core = d.groups[static_cast<std::size_t>(r.thread)].core;
+    r.helper_core = d.helper_cores[static_cast<std::size_t>(k)];
   }
 }
 

@@ -69,6 +69,11 @@ struct StageReport {
   LatencyHistogram service;  // start to end of its work on a frame
   LatencyHistogram wait;     // end of the previous stage to the start of this one (queueing)
   LatencyHistogram cpu;      // CPU time of its thread for the frame
+  // Its helper thread (Stage::helper), empty when it ran none: start to end of the helper's part of a
+  // frame, and the helper's CPU time for it.
+  LatencyHistogram helper_service;
+  LatencyHistogram helper_cpu;
+  int helper_core = -1;  // the core the helper was pinned to, -1 if not pinned
 };
 
 // A frame that left the pipeline early.

@@ -14,6 +14,8 @@
 
 namespace voca::pipeline {
 
+class StageHelper;
+
 // Why a slot leaves the pipeline before its last stage.
 enum class ReleaseReason : std::uint8_t {
   kDone,        // passed every stage
@@ -43,6 +45,8 @@ class StageContext {
   // holding every slot would leave the source none to bring the input it waits for (a decoder
   // holding pictures back until it gets more packets): it must give the oldest up first.
   virtual int maxHeldSlots() const = 0;
+  // The core the pin map gives the named stage's helper thread ("<stage>.helper"), -1 for none.
+  virtual int helperCore(std::string_view stage) const = 0;
 
  protected:
   ~StageContext() = default;
@@ -58,6 +62,11 @@ class Stage {
   virtual bool canSkipInput() const { return false; }
   // Rough share of a frame's work, used to balance stages over a given number of threads.
   virtual int relativeCost() const { return 1; }
+  // A stage that does part of a frame's work on a helper thread (StageHelper): whether it will, known
+  // from construction (a pin map may then name "<stage>.helper"), and the helper once start() made it.
+  // The runner reads the helper's last run after each frame the stage forwards, for the trace.
+  virtual bool usesHelper() const { return false; }
+  virtual const StageHelper* helper() const { return nullptr; }
   virtual void start(const StageContext& /*context*/) {}
   // Handles one frame: calls out.forward() for each slot that goes on (zero or more, in order; a
   // stage may hold up to context.maxHeldSlots() slots and forward them later) or out.release().

@@ -43,8 +43,9 @@ FrontendStage::FrontendStage(const FrontendConfig& config, const StereoRig& rig,
 void FrontendStage::start(const StageContext& context) {
   context_ = &context;
   if (camera_threads_ == 2 && helper_ == nullptr) {
-    helper_ = std::make_unique<StageHelper>("voca-frontend1",
-                                            [this] { frontend_.trackCamera(1, *helper_frame_, *helper_stats_); });
+    helper_ = std::make_unique<StageHelper>(
+        "voca-frontend.helper", [this] { frontend_.trackCamera(1, *helper_frame_, *helper_stats_); },
+        context.helperCore(name()));
   }
 }
 

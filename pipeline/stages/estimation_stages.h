@@ -42,8 +42,11 @@ class FrontendStage final : public Stage {
   std::string_view name() const override { return "frontend"; }
   bool canSkipInput() const override { return true; }
   int relativeCost() const override { return 4; }
-  // Starts the helper thread, if any, from the stage's thread: it shares its scheduling class.
+  // Starts the helper thread, if any, from the stage's thread: it shares its scheduling class, and its
+  // core unless the pin map names "frontend.helper".
   void start(const StageContext& context) override;
+  bool usesHelper() const override { return camera_threads_ == 2; }
+  const StageHelper* helper() const override { return helper_.get(); }
   void process(FrameSlot& slot, Emitter& out) override;
 
  private:

@@ -199,9 +199,11 @@ VoRunResult runOnStream(const VoRunOptions& options) {
 
 // VoRunOptions::frontend_camera_threads resolved (FrontendStage checks a value given). A helper
 // thread pays only when another core is free to run it; a layout with pinned stages is the user's,
-// and gets no thread it did not ask for.
+// and gets no thread it did not ask for, unless it pins the helper ("frontend.helper") too.
 int frontendCameraThreads(const VoRunOptions& options) {
   if (options.frontend_camera_threads != 0) return options.frontend_camera_threads;
+  const auto& pins = options.pipeline.pins;
+  if (std::any_of(pins.begin(), pins.end(), [](const auto& pin) { return pin.first == "frontend.helper"; })) return 2;
   const bool staged = options.pipeline.threads != 1;
   return staged && options.pipeline.pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
 }
@@ -586,15 +588,20 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"guess_distance_prior", distanceJson(t.guess_prior)}};
   nlohmann::json stages = nlohmann::json::array();
   for (const StageReport& s : p.stages) {
-    stages.push_back({{"name", s.name},
-                      {"thread", s.thread},
-                      {"core", s.core},
-                      {"service", histogramJson(s.service)},
-                      {"wait", histogramJson(s.wait)},
-                      {"cpu", histogramJson(s.cpu)},
-                      {"queue_high_water", s.queue_high_water},
-                      {"dropped", s.dropped},
-                      {"damaged", s.damaged}});
+    nlohmann::json stage = {{"name", s.name},
+                            {"thread", s.thread},
+                            {"core", s.core},
+                            {"service", histogramJson(s.service)},
+                            {"wait", histogramJson(s.wait)},
+                            {"cpu", histogramJson(s.cpu)},
+                            {"queue_high_water", s.queue_high_water},
+                            {"dropped", s.dropped},
+                            {"damaged", s.damaged}};
+    if (s.helper_service.count() > 0) {
+      stage["helper"] = {
+          {"core", s.helper_core}, {"service", histogramJson(s.helper_service)}, {"cpu", histogramJson(s.helper_cpu)}};
+    }
+    stages.push_back(stage);
   }
   nlohmann::json released = nlohmann::json::array();
   for (const ReleasedFrame& f : p.released) {

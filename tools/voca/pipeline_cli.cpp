@@ -16,11 +16,12 @@ void addPipelineOptions(CLI::App& app, PipelineCli& cli) {
       ->capture_default_str();
   app.add_option("--frontend-threads", cli.frontend_threads,
                  "Threads the frontend tracks the two cameras on: auto (2 when the stages have threads of their\n"
-                 "own, no --pin, and two or more cores), 1, or 2 (the right camera on a helper thread; same results)")
+                 "own, no --pin or one naming frontend.helper, and two or more cores), 1, or 2 (the right camera on\n"
+                 "a helper thread; same results)")
       ->capture_default_str();
   app.add_option("--pin", cli.pin,
-                 "Stage-to-core map, e.g. decode:0,frontend:0,backend:1 (stages: read, decode, "
-                 "frontend, backend, write)");
+                 "Stage-to-core map, e.g. decode:0,frontend:0,backend:1 (stages: read, decode, frontend, backend,\n"
+                 "write; frontend.helper: the frontend's helper thread, which otherwise shares the frontend's core)");
   app.add_option("--sched", cli.scheduling, "Scheduling class of the pipeline threads: other, fifo or rr")
       ->capture_default_str();
   app.add_option("--priority", cli.priority, "Real-time priority for --sched fifo|rr (1-99)")->capture_default_str();
