@@ -1268,7 +1268,9 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
   }
 }
 
-TEST_CASE("frontend: the two cameras tracked on two threads, or in either order, give track()'s results bit for bit") {
+TEST_CASE(
+    "frontend: the cameras, and shares of one camera's points, tracked on two threads or in any order, give "
+    "track()'s results bit for bit") {
   // The image moves 6, 12, ... 30 px in frames 1-5 (and a third of that down): beyond the pyramid's
   // reach from about 20 px on, where the previous-flow retry keeps the tracks. The vectors are the
   // first frame's motion a pixel off, so the prior tracks run and agree at first, then fail.
@@ -1279,12 +1281,15 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
   config.retry_previous_flow = InputScope::kAlways;
   MotionField field(seq.kWidth, seq.kHeight);
   uniformField(field, seq.kWidth, seq.kHeight, seq.flow.cast<float>() + Eigen::Vector2f(1.f, -0.5f), PictureType::kP);
-  enum class Order { kTrack, kConcurrent, kRightFirst };
+  // kSplit: as the frontend stage's helper does, one thread tracks the left camera's first points,
+  // the other the right camera and the left's last ones, split at `share` of the left points.
+  enum class Order { kTrack, kConcurrent, kRightFirst, kSplit, kSplitLastFirst };
   struct Frame {
     TrackedStereoFrame tracked;
     FrontendStats stats;
+    std::vector<PointTrace> left_traces;
   };
-  const auto run = [&](Order order) {
+  const auto run = [&](Order order, double share = 0.0) {
     KltFrontend frontend(config, rig, {.max_points = 200});
     std::vector<Frame> frames(6);
     Eigen::Vector2d position = Eigen::Vector2d::Zero();
@@ -1297,10 +1302,28 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
       Frame& out = frames[static_cast<std::size_t>(k)];
       if (order == Order::kTrack) {
         frontend.track(in, out.tracked, out.stats);
+        out.left_traces.assign(frontend.traces(0).begin(), frontend.traces(0).end());
         continue;
       }
       frontend.beginFrame(in, out.stats);
-      if (order == Order::kConcurrent) {
+      if (order == Order::kSplit || order == Order::kSplitLastFirst) {
+        frontend.beginCamera(0, in, out.stats);
+        const std::size_t n = frontend.trackedPoints(0);
+        const auto split = static_cast<std::size_t>(std::lround(share * static_cast<double>(n)));
+        if (order == Order::kSplit) {
+          std::thread helper([&] {
+            frontend.trackCamera(1, in, out.stats);
+            frontend.trackPart(0, 1, split, n);
+          });
+          frontend.trackPart(0, 0, 0, split);
+          helper.join();
+        } else {
+          frontend.trackPart(0, 1, split, n);
+          frontend.trackPart(0, 0, 0, split);
+          frontend.trackCamera(1, in, out.stats);
+        }
+        frontend.endCamera(0, out.stats);
+      } else if (order == Order::kConcurrent) {
         std::thread right([&] { frontend.trackCamera(1, in, out.stats); });
         frontend.trackCamera(0, in, out.stats);
         right.join();
@@ -1309,6 +1332,7 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
         frontend.trackCamera(0, in, out.stats);
       }
       frontend.endFrame(in, out.tracked, out.stats);
+      out.left_traces.assign(frontend.traces(0).begin(), frontend.traces(0).end());
     }
     return frames;
   };
@@ -1324,10 +1348,13 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
   CHECK(prior_tracks > 100);
   CHECK(retried > 10);
   CHECK(reference.back().tracked.observations[1].size() > 30);
-  for (const Order order : {Order::kConcurrent, Order::kRightFirst}) {
-    const std::vector<Frame> frames = run(order);
+  const std::vector<std::pair<Order, double>> layouts = {
+      {Order::kConcurrent, 0.0}, {Order::kRightFirst, 0.0}, {Order::kSplit, 0.0},         {Order::kSplit, 0.37},
+      {Order::kSplit, 0.5},      {Order::kSplit, 1.0},      {Order::kSplitLastFirst, 0.6}};
+  for (const auto& [order, share] : layouts) {
+    const std::vector<Frame> frames = run(order, share);
     for (std::size_t k = 0; k < frames.size(); ++k) {
-      INFO("order " << static_cast<int>(order) << ", frame " << k);
+      INFO("order " << static_cast<int>(order) << ", share " << share << ", frame " << k);
       const Frame& a = reference[k];
       const Frame& b = frames[k];
       for (std::size_t c = 0; c < 2; ++c) {
@@ -1348,6 +1375,12 @@ TEST_CASE("frontend: the two cameras tracked on two threads, or in either order,
       CHECK(a.stats.epipolar_rejected == b.stats.epipolar_rejected);
       CHECK(a.stats.num_left == b.stats.num_left);
       CHECK(a.stats.num_right == b.stats.num_right);
+      REQUIRE(a.left_traces.size() == b.left_traces.size());
+      for (std::size_t i = 0; i < a.left_traces.size(); ++i) {
+        CHECK(a.left_traces[i].track_id == b.left_traces[i].track_id);
+        CHECK(a.left_traces[i].tracked_px == b.left_traces[i].tracked_px);
+        CHECK(a.left_traces[i].kept == b.left_traces[i].kept);
+      }
     }
   }
 }

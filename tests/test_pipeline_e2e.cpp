@@ -178,7 +178,7 @@ TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2, names anything e
   const test::CommandOutput helped = test::runVocaOutput(run + " --frontend-threads 2");
   INFO(helped.text);
   CHECK(helped.exit_code == 0);
-  CHECK(helped.text.find("(and a frontend helper tracking the right camera)") != std::string::npos);
+  CHECK(helped.text.find("(and a frontend helper sharing the tracking)") != std::string::npos);
   const test::CommandOutput single = test::runVocaOutput(run + " --threads 1");
   CHECK(single.exit_code == 0);
   CHECK(single.text.find("frontend helper") == std::string::npos);  // auto: one thread runs everything
@@ -189,7 +189,7 @@ TEST_CASE("pipeline e2e: --frontend-threads takes auto, 1 or 2, names anything e
                           (dir / "stats.json").string());
   INFO(pinned.text);
   CHECK(pinned.exit_code == 0);
-  CHECK(pinned.text.find("(and a frontend helper tracking the right camera)") != std::string::npos);
+  CHECK(pinned.text.find("(and a frontend helper sharing the tracking)") != std::string::npos);
   CHECK(pinned.text.find("warning: thread 2 (frontend helper): core 4095") != std::string::npos);
   const std::string trace = fileText(dir / "trace.json");
   std::size_t helper_slices = 0;

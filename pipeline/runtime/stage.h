@@ -64,7 +64,8 @@ class Stage {
   virtual int relativeCost() const { return 1; }
   // A stage that does part of a frame's work on a helper thread (StageHelper): whether it will, known
   // from construction (a pin map may then name "<stage>.helper"), and the helper once start() made it.
-  // The runner reads the helper's last run after each frame the stage forwards, for the trace.
+  // Such a stage runs its helper for every frame it forwards: the runner reads the helper's last run
+  // then, for the trace and the profile.
   virtual bool usesHelper() const { return false; }
   virtual const StageHelper* helper() const { return nullptr; }
   virtual void start(const StageContext& /*context*/) {}

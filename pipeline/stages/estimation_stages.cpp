@@ -44,7 +44,11 @@ void FrontendStage::start(const StageContext& context) {
   context_ = &context;
   if (camera_threads_ == 2 && helper_ == nullptr) {
     helper_ = std::make_unique<StageHelper>(
-        "voca-frontend.helper", [this] { frontend_.trackCamera(1, *helper_frame_, *helper_stats_); },
+        "voca-frontend.helper",
+        [this] {
+          frontend_.trackCamera(1, *helper_frame_, *helper_stats_);
+          frontend_.trackPart(0, 1, left_split_, frontend_.trackedPoints(0));
+        },
         context.helperCore(name()));
   }
 }
@@ -65,16 +69,23 @@ void FrontendStage::process(FrameSlot& slot, Emitter& out) {
     frontend_.track(frame, slot.tracked, slot.frontend_stats);
   } else {
     frontend_.beginFrame(frame, slot.frontend_stats);
+    frontend_.beginCamera(0, frame, slot.frontend_stats);
+    // The left camera usually has more points than the right (new points are matched into the right
+    // image, and not all are found): the helper takes the right camera's and the left's last ones, so
+    // both threads track about half of all points.
+    const std::size_t left = frontend_.trackedPoints(0), right = frontend_.trackedPoints(1);
+    left_split_ = std::min(left, (left + right) / 2);
     helper_frame_ = &frame;
     helper_stats_ = &slot.frontend_stats;
     helper_->request();
     try {
-      frontend_.trackCamera(0, frame, slot.frontend_stats);
+      frontend_.trackPart(0, 0, 0, left_split_);
     } catch (...) {
       helper_->wait();  // the helper works on the same frontend: it must finish first
       throw;
     }
     helper_->wait();
+    frontend_.endCamera(0, slot.frontend_stats);
     frontend_.endFrame(frame, slot.tracked, slot.frontend_stats);
   }
   if (keep_left_traces_) {

@@ -431,7 +431,7 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
   }
   fmt::print(out, "pipeline: {} thread{}{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
              r.pipeline.threads == 1 ? "" : "s",
-             r.frontend_camera_threads > 1 ? " (and a frontend helper tracking the right camera)" : "",
+             r.frontend_camera_threads > 1 ? " (and a frontend helper sharing the tracking)" : "",
              r.pipeline.wall_s > 0.0 ? static_cast<double>(r.pipeline.completed) / r.pipeline.wall_s : 0.0,
              r.pipeline.wall_s);
   if (r.pipeline.dropped > 0 || r.pipeline.damaged > 0) {

@@ -160,7 +160,7 @@ Runner configurePipelineBench(CLI::App& app) {
   app.footer(
       "Offline: the whole VO (read, decode, frontend, backend, write; trajectory kept in memory only) with\n"
       "every stage in one thread, with one thread per stage, and with one thread per stage and the frontend's\n"
-      "right camera on a helper thread (--frontend-threads 2), alternating, --repeat times each; prints\n"
+      "helper thread (--frontend-threads 2), alternating, --repeat times each; prints\n"
       "the median stereo frames/s of each, the speed-up, peak RSS and the per-stage latency table. Then one\n"
       "run paced at the recording's timestamps (--realtime) for the latency a live user sees: arrival of a\n"
       "frame to its pose being written, p50/p90/p99/max, and frames dropped. Measure on an idle machine.");

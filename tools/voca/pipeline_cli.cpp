@@ -16,8 +16,8 @@ void addPipelineOptions(CLI::App& app, PipelineCli& cli) {
       ->capture_default_str();
   app.add_option("--frontend-threads", cli.frontend_threads,
                  "Threads the frontend tracks the two cameras on: auto (2 when the stages have threads of their\n"
-                 "own, no --pin or one naming frontend.helper, and two or more cores), 1, or 2 (the right camera on\n"
-                 "a helper thread; same results)")
+                 "own, no --pin or one naming frontend.helper, and two or more cores), 1, or 2 (a helper thread\n"
+                 "tracks the right camera and the left camera's last points, about half of all; same results)")
       ->capture_default_str();
   app.add_option("--pin", cli.pin,
                  "Stage-to-core map, e.g. decode:0,frontend:0,backend:1 (stages: read, decode, frontend, backend,\n"
@@ -81,9 +81,9 @@ void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& option
 std::string pipelineHelpFooter() {
   return "Pipeline: read -> decode (video input) -> frontend -> backend -> write, each stage on its own thread by\n"
          "default, connected by bounded lock-free queues; --threads 1 runs them all in one thread and writes a\n"
-         "byte-identical trajectory. With threads per stage the frontend tracks the right camera on a helper\n"
-         "thread while it tracks the left one (--frontend-threads). --pin maps stages to cores (as taskset\n"
-         "counts them); --sched fifo|rr with\n"
+         "byte-identical trajectory. With threads per stage the frontend shares its points with a helper thread\n"
+         "(the right camera and the left camera's last points; --frontend-threads). --pin maps stages to\n"
+         "cores (as taskset counts them); --sched fifo|rr with\n"
          "--priority and --mlock need CAP_SYS_NICE / a memlock limit, and warn once and go on when refused.\n"
          "Offline replay never drops a frame; --realtime paces the input at its timestamps and drops the\n"
          "oldest waiting frame when the frontend falls behind (every drop is counted and listed).\n"

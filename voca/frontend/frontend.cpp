@@ -14,6 +14,21 @@ void FrontendStats::reserve(std::size_t max_points) {
   guess_dist_prior_px.reserve(2 * max_points);
 }
 
+TemporalStats& TemporalStats::operator+=(const TemporalStats& other) {
+  previous += other.previous;
+  with_vector += other.with_vector;
+  tracked_plain += other.tracked_plain;
+  tracked_prior += other.tracked_prior;
+  kept += other.kept;
+  lost += other.lost;
+  rescued += other.rescued;
+  flow_retried += other.flow_retried;
+  consensus_rejections += other.consensus_rejections;
+  distrusted += other.distrusted;
+  prior_confirmed += other.prior_confirmed;
+  return *this;
+}
+
 void FrontendStats::clear() {
   temporal = {};
   bridged = {false, false};
@@ -81,19 +96,17 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     CameraState& cam = cameras_[static_cast<std::size_t>(c)];
     for (ImagePyramid& pyramid : cam.pyramids)
       pyramid = ImagePyramid(max_width, max_height, num_levels_, config_.presmooth != InputScope::kOff);
-    for (auto* v : {&cam.ids, &cam.next_ids}) v->reserve(static_cast<std::size_t>(max_points_));
-    for (auto* v : {&cam.points, &cam.next_points}) v->reserve(static_cast<std::size_t>(max_points_));
-    for (auto* v : {&cam.slots, &cam.next_slots}) v->reserve(static_cast<std::size_t>(max_points_));
-    for (auto* v : {&cam.flow_x, &cam.flow_y}) v->reserve(static_cast<std::size_t>(max_points_));
-    cam.traces.reserve(static_cast<std::size_t>(max_points_));
-    for (auto* v : {&cam.guess_dist_plain_px, &cam.guess_dist_prior_px})
-      v->reserve(static_cast<std::size_t>(max_points_));
-    cam.retry_candidates.reserve(static_cast<std::size_t>(max_points_));
-    // Live points plus two scratch slots (the plain and the prior backward track of one point).
+    cam.ids.reserve(static_cast<std::size_t>(max_points_));
+    cam.points.reserve(static_cast<std::size_t>(max_points_));
+    cam.slots.reserve(static_cast<std::size_t>(max_points_));
+    for (TemporalPart& part : cam.parts) part.reserve(static_cast<std::size_t>(max_points_));
+    cam.step.reserve(static_cast<std::size_t>(max_points_));
+    // Live points plus the scratch slots of each share of the temporal step.
+    const int slot_count = max_points_ + kScratchSlots * static_cast<int>(cam.parts.size());
     cam.num_levels = num_levels_;
-    cam.pool.resize(static_cast<std::size_t>(max_points_ + 2) * static_cast<std::size_t>(num_levels_));
-    cam.free_slots.reserve(static_cast<std::size_t>(max_points_ + 2));
-    cam.built_levels.assign(static_cast<std::size_t>(max_points_ + 2), 0);
+    cam.pool.resize(static_cast<std::size_t>(slot_count) * static_cast<std::size_t>(num_levels_));
+    cam.free_slots.reserve(static_cast<std::size_t>(slot_count));
+    cam.built_levels.assign(static_cast<std::size_t>(slot_count), 0);
     cam.resetSlots();
     cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes, config_.prior_reject_inconsistent);
   }
@@ -154,6 +167,45 @@ void KltFrontend::computeRightOverlap(const StereoRig& rig) {
   }
 }
 
+void KltFrontend::TemporalPart::reserve(std::size_t max_points) {
+  ids.reserve(max_points);
+  points.reserve(max_points);
+  slots.reserve(max_points);
+  traces.reserve(max_points);
+  retry_candidates.reserve(max_points);
+  for (auto* v : {&flow_x, &flow_y, &guess_dist_plain_px, &guess_dist_prior_px}) v->reserve(max_points);
+  free_slots.reserve(max_points + kScratchSlots);
+}
+
+void KltFrontend::TemporalPart::clear() {
+  stats = {};
+  ids.clear();
+  points.clear();
+  slots.clear();
+  traces.clear();
+  retry_candidates.clear();
+  for (auto* v : {&flow_x, &flow_y, &guess_dist_plain_px, &guess_dist_prior_px}) v->clear();
+}
+
+void KltFrontend::TemporalPart::append(const TemporalPart& other) {
+  for (RetryCandidate candidate : other.retry_candidates) {
+    candidate.next += ids.size();
+    candidate.trace += traces.size();
+    retry_candidates.push_back(candidate);
+  }
+  stats += other.stats;
+  ids.insert(ids.end(), other.ids.begin(), other.ids.end());
+  points.insert(points.end(), other.points.begin(), other.points.end());
+  slots.insert(slots.end(), other.slots.begin(), other.slots.end());
+  traces.insert(traces.end(), other.traces.begin(), other.traces.end());
+  flow_x.insert(flow_x.end(), other.flow_x.begin(), other.flow_x.end());
+  flow_y.insert(flow_y.end(), other.flow_y.begin(), other.flow_y.end());
+  guess_dist_plain_px.insert(guess_dist_plain_px.end(), other.guess_dist_plain_px.begin(),
+                             other.guess_dist_plain_px.end());
+  guess_dist_prior_px.insert(guess_dist_prior_px.end(), other.guess_dist_prior_px.begin(),
+                             other.guess_dist_prior_px.end());
+}
+
 void KltFrontend::CameraState::resetSlots() {
   free_slots.clear();
   const int count = static_cast<int>(pool.size()) / num_levels;
@@ -166,7 +218,7 @@ void KltFrontend::reset() {
     cam.ids.clear();
     cam.points.clear();
     cam.resetSlots();
-    cam.traces.clear();
+    cam.step.clear();
     cam.bridge.clear();
     cam.previous_flow.setZero();
   }
@@ -259,35 +311,31 @@ bool KltFrontend::trustVector(const MotionBlock& block, const CameraState& cam, 
   return residual <= static_cast<float>(config_.prior_max_residual_px) * std::max(gradient, 1.f);
 }
 
-void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendStats& stats) {
+void KltFrontend::trackPart(int camera, int part, std::size_t begin, std::size_t end) {
+  if (!have_previous_) return;
   CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
-  TemporalStats& ts = stats.temporal[static_cast<std::size_t>(camera)];
+  TemporalPart& out = cam.parts[static_cast<std::size_t>(part)];
+  TemporalStats& ts = out.stats;
+  const MotionField* field = cam.field;
   const ImagePyramid& from = cam.prev();
   const ImagePyramid& to = cam.cur();
   const PriorMode mode = config_.prior_mode;
   const float tolerance = static_cast<float>(config_.consensus_tolerance_px2);
   const float agree_radius2 = static_cast<float>(config_.prior_agree_radius_px * config_.prior_agree_radius_px);
   const float rescue_min2 = static_cast<float>(config_.prior_rescue_min_px * config_.prior_rescue_min_px);
-  cam.next_ids.clear();
-  cam.next_points.clear();
-  cam.next_slots.clear();
-  ts.previous = static_cast<int>(cam.points.size());
   const Eigen::Vector2f zero = Eigen::Vector2f::Zero();
   const int all_levels = num_levels_;
   // A bridged field is an older frame's motion, less exact: its guesses get the whole pyramid. So do
   // of_then_mv's, whose prior only rescues points the plain track lost: the hard ones, where a vector
   // that missed by a few pixels needs the coarse levels (measured: shortened there, it loses them).
-  const bool whole_pyramid = stats.bridged[static_cast<std::size_t>(camera)] || mode == PriorMode::kOfThenMv;
+  const bool whole_pyramid = cam.field_bridged || mode == PriorMode::kOfThenMv;
   const int prior_levels = whole_pyramid ? all_levels : prior_levels_;
   // retry_previous_flow: a flow under a pixel would start the retry where the plain track started.
   const bool retry_flow = retry_flow_ && cam.previous_flow.squaredNorm() >= 1.f;
-  cam.flow_x.clear();
-  cam.flow_y.clear();
-  cam.retry_candidates.clear();
 
-  for (std::size_t i = 0; i < cam.points.size(); ++i) {
+  for (std::size_t i = begin; i < end; ++i) {
     const Eigen::Vector2f p = cam.points[i];
-    if (i + 1 < cam.points.size()) {
+    if (i + 1 < end) {
       // The next point's patches in both images, fetched while this one is tracked: the pyramids
       // are larger than the cache and each patch is touched once per frame.
       prefetchPyramidPatch(to, cam.points[i + 1], *pattern_, kPrefetchMarginPx, 2);
@@ -330,7 +378,7 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
         break;
     }
     const int forward_slot = cam.slots[i];
-    const int plain_slot = cam.acquire(), prior_slot = cam.acquire();
+    const int plain_slot = out.acquire(), prior_slot = out.acquire();
     const auto forward = [&](int levels) { return cam.trackedTemplates(forward_slot, from, p, levels, *pattern_); };
     const auto attempt = [&](const Eigen::Vector2f& guess, int levels, int backward_slot, Eigen::Vector2f& tracked) {
       return trackChecked(forward(levels), from, to, p, guess, levels, temporal_round_trip2_, cam, backward_slot,
@@ -394,8 +442,8 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     }
     // The kept result's backward templates become the point's templates; everything else is freed
     // (the forward slot once the point's retry is settled).
-    cam.release(keep && keep_prior ? plain_slot : prior_slot);
-    if (!keep) cam.release(plain_slot);
+    out.release(keep && keep_prior ? plain_slot : prior_slot);
+    if (!keep) out.release(plain_slot);
 
     PointTrace trace;
     trace.track_id = cam.ids[i];
@@ -404,63 +452,77 @@ void KltFrontend::trackTemporal(int camera, const MotionField* field, FrontendSt
     trace.has_prior = has_vector;
     trace.tracked_px = keep ? result : (prior_ok ? prior_px : plain_px);
     trace.kept = keep;
-    cam.traces.push_back(trace);
+    out.traces.push_back(trace);
     if (!keep) {
       // The last resort of every mode (retry_previous_flow), decided once the whole frame is known:
       // the point keeps its templates until then. From the same start it would fail again.
       // It holds its place in the next frame's list, which keeps the ids in ascending order.
       if (retry_flow && (!has_vector || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
-        cam.retry_candidates.push_back({cam.next_ids.size(), cam.traces.size() - 1, forward_slot});
-        cam.next_ids.push_back(cam.ids[i]);
-        cam.next_points.push_back(p);
-        cam.next_slots.push_back(-1);
+        out.retry_candidates.push_back({out.ids.size(), out.traces.size() - 1, forward_slot});
+        out.ids.push_back(cam.ids[i]);
+        out.points.push_back(p);
+        out.slots.push_back(-1);
         continue;
       }
-      cam.release(forward_slot);
+      out.release(forward_slot);
       ++ts.lost;
       continue;
     }
-    cam.release(forward_slot);
-    cam.next_ids.push_back(cam.ids[i]);
-    cam.next_points.push_back(result);
-    cam.next_slots.push_back(keep_prior ? prior_slot : plain_slot);
-    countKept(cam, ts, result, trace);
+    out.release(forward_slot);
+    out.ids.push_back(cam.ids[i]);
+    out.points.push_back(result);
+    out.slots.push_back(keep_prior ? prior_slot : plain_slot);
+    countKept(out, result, trace);
   }
-  const bool retry_lost_some = retryFromPreviousFlow(cam, ts);
-  std::swap(cam.ids, cam.next_ids);
-  std::swap(cam.points, cam.next_points);
-  std::swap(cam.slots, cam.next_slots);
+}
+
+void KltFrontend::endCamera(int camera, FrontendStats& stats) {
+  if (!have_previous_) return;
+  CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
+  TemporalPart& step = cam.step;
+  for (TemporalPart& part : cam.parts) {
+    step.append(part);
+    cam.free_slots.insert(cam.free_slots.end(), part.free_slots.begin(), part.free_slots.end());
+    part.free_slots.clear();
+  }
+  step.stats.previous = static_cast<int>(cam.points.size());
+  const bool retry_lost_some = retryFromPreviousFlow(cam);
+  stats.temporal[static_cast<std::size_t>(camera)] = step.stats;
+  std::swap(cam.ids, step.ids);
+  std::swap(cam.points, step.points);
+  std::swap(cam.slots, step.slots);
   // The candidates the retry lost leave their places (slot -1, no templates); the others keep
   // theirs, so the ids still ascend.
   if (retry_lost_some) cam.retain([&](std::size_t i, std::size_t) { return cam.slots[i] >= 0; });
   // The image flow the next frame's retries start from. With no track kept it stays what it was:
   // the camera's last known motion beats none.
-  if (!cam.flow_x.empty()) {
+  if (!step.flow_x.empty()) {
     const auto median = [](std::vector<float>& v) {
       const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
       std::nth_element(v.begin(), mid, v.end());
       return *mid;
     };
-    cam.previous_flow = Eigen::Vector2f(median(cam.flow_x), median(cam.flow_y));
+    cam.previous_flow = Eigen::Vector2f(median(step.flow_x), median(step.flow_y));
   }
 }
 
-void KltFrontend::countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked,
-                            const PointTrace& trace) const {
+void KltFrontend::countKept(TemporalPart& out, const Eigen::Vector2f& tracked, const PointTrace& trace) const {
   const Eigen::Vector2f p = trace.previous_px;
-  ++ts.kept;
+  ++out.stats.kept;
   if (retry_flow_) {
-    cam.flow_x.push_back(tracked.x() - p.x());
-    cam.flow_y.push_back(tracked.y() - p.y());
+    out.flow_x.push_back(tracked.x() - p.x());
+    out.flow_y.push_back(tracked.y() - p.y());
   }
   if (trace.has_prior) {
-    cam.guess_dist_plain_px.push_back((tracked - p).norm());
-    cam.guess_dist_prior_px.push_back((tracked - trace.prior_px).norm());
+    out.guess_dist_plain_px.push_back((tracked - p).norm());
+    out.guess_dist_prior_px.push_back((tracked - trace.prior_px).norm());
   }
 }
 
-bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts) {
-  if (cam.retry_candidates.empty()) return false;
+bool KltFrontend::retryFromPreviousFlow(CameraState& cam) {
+  TemporalPart& step = cam.step;
+  TemporalStats& ts = step.stats;
+  if (step.retry_candidates.empty()) return false;
   // An ordinary frame loses a few points (they left the view, were occluded or changed); a turn
   // beyond the pyramid's reach loses most at once, and there the retry is the only way to keep the
   // frame's tracks. Retrying the few as well raised raw MH_03's ATE (retry_min_lost_fraction,
@@ -470,8 +532,8 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts) {
   const ImagePyramid& from = cam.prev();
   const ImagePyramid& to = cam.cur();
   bool any_lost = false;
-  for (const RetryCandidate& candidate : cam.retry_candidates) {
-    PointTrace& trace = cam.traces[candidate.trace];
+  for (const RetryCandidate& candidate : step.retry_candidates) {
+    PointTrace& trace = step.traces[candidate.trace];
     const int slot = retry ? cam.acquire() : -1;
     Eigen::Vector2f tracked = trace.previous_px + cam.previous_flow;
     const bool ok =
@@ -481,7 +543,7 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts) {
     cam.release(candidate.slot);
     if (!ok) {
       if (slot >= 0) cam.release(slot);
-      cam.next_slots[candidate.next] = -1;
+      step.slots[candidate.next] = -1;
       any_lost = true;
       ++ts.lost;
       continue;
@@ -489,9 +551,9 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam, TemporalStats& ts) {
     trace.tracked_px = tracked;
     trace.kept = true;
     ++ts.flow_retried;
-    cam.next_points[candidate.next] = tracked;
-    cam.next_slots[candidate.next] = slot;
-    countKept(cam, ts, tracked, trace);
+    step.points[candidate.next] = tracked;
+    step.slots[candidate.next] = slot;
+    countKept(step, tracked, trace);
   }
   return any_lost;
 }
@@ -630,26 +692,33 @@ void KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& sta
 }
 
 void KltFrontend::trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
+  beginCamera(camera, input, stats);
+  trackPart(camera, 0, 0, trackedPoints(camera));
+  endCamera(camera, stats);
+}
+
+void KltFrontend::beginCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
   CameraState& cam = cameras_[static_cast<std::size_t>(camera)];
   cam.current = 1 - cam.current;
   cam.pyramids[static_cast<std::size_t>(cam.current)].build(input.images[static_cast<std::size_t>(camera)].view(),
                                                             presmooth_);
-  cam.traces.clear();
-  cam.guess_dist_plain_px.clear();
-  cam.guess_dist_prior_px.clear();
-  if (have_previous_) {
-    trackTemporal(camera, priorField(camera, input, stats), stats);
-  } else {
-    priorField(camera, input, stats);  // remember a P-frame field for bridging
+  cam.step.clear();
+  cam.field = priorField(camera, input, stats);  // without a previous frame: remembers a P-frame field for bridging
+  cam.field_bridged = stats.bridged[static_cast<std::size_t>(camera)];
+  if (!have_previous_) return;
+  // Each share takes its scratch slots now, before the shares may run on two threads.
+  for (TemporalPart& part : cam.parts) {
+    part.clear();
+    for (int k = 0; k < kScratchSlots; ++k) part.release(cam.acquire());
   }
 }
 
 void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
   for (const CameraState& cam : cameras_) {
-    stats.guess_dist_plain_px.insert(stats.guess_dist_plain_px.end(), cam.guess_dist_plain_px.begin(),
-                                     cam.guess_dist_plain_px.end());
-    stats.guess_dist_prior_px.insert(stats.guess_dist_prior_px.end(), cam.guess_dist_prior_px.begin(),
-                                     cam.guess_dist_prior_px.end());
+    stats.guess_dist_plain_px.insert(stats.guess_dist_plain_px.end(), cam.step.guess_dist_plain_px.begin(),
+                                     cam.step.guess_dist_plain_px.end());
+    stats.guess_dist_prior_px.insert(stats.guess_dist_prior_px.end(), cam.step.guess_dist_prior_px.begin(),
+                                     cam.step.guess_dist_prior_px.end());
   }
   // Every track survived and the capacity is full: no point could be detected. Crowded tracks give
   // way (thin_when_full_px).

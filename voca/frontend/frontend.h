@@ -42,6 +42,8 @@ struct TemporalStats {
   int distrusted = 0;       // vectors the codec-confidence checks rejected (counted in with_vector too)
   int prior_confirmed = 0;  // prior tracks not run: the vector landed near the plain track's result
   bool operator==(const TemporalStats&) const = default;
+  // Adds every counter (the counts of two shares of one camera's points).
+  TemporalStats& operator+=(const TemporalStats& other);
 };
 
 // What one call of KltFrontend::track did.
@@ -97,11 +99,22 @@ class KltFrontend {
   void beginFrame(const DecodedStereoFrame& input, FrontendStats& stats);
   void trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   void endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
+  // trackCamera() in three steps, to share one camera's points between two threads: beginCamera
+  // (its pyramid and prior field), then trackPart(camera, 0, 0, k) and trackPart(camera, 1, k, n)
+  // for any split k of its n = trackedPoints(camera) points, which may run concurrently with each
+  // other and with the other camera's steps, then endCamera (the shares joined in the points' order,
+  // the frame-level retry). The same results as trackCamera(), bit for bit, for every k.
+  void beginCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
+  std::size_t trackedPoints(int camera) const { return cameras_[static_cast<std::size_t>(camera)].points.size(); }
+  void trackPart(int camera, int part, std::size_t begin, std::size_t end);
+  void endCamera(int camera, FrontendStats& stats);
   // Forgets every track (the next frame starts from detection).
   void reset();
 
   // Temporal step of the last frame per camera, for visualisation.
-  std::span<const PointTrace> traces(int camera) const { return cameras_[static_cast<std::size_t>(camera)].traces; }
+  std::span<const PointTrace> traces(int camera) const {
+    return cameras_[static_cast<std::size_t>(camera)].step.traces;
+  }
   const FrontendConfig& config() const { return config_; }
 
  private:
@@ -111,15 +124,44 @@ class KltFrontend {
     std::size_t trace = 0;  // index into the camera's traces
     int slot = 0;           // the point's templates
   };
+  // What the temporal step made of a run of one camera's points, in their order: the next frame's
+  // points (ids, positions, template slots; a retry candidate holds slot -1 until decided), the
+  // traces, the retry candidates, the kept tracks' flow and guess distances, the counters. Each of
+  // the two shares a step may be split into has one, with free slots of its own: a point takes two
+  // fresh slots and gives back at least as many, so two suffice. The joined step has one more.
+  struct TemporalPart {
+    TemporalStats stats;
+    std::vector<std::uint64_t> ids;
+    std::vector<Eigen::Vector2f> points;
+    std::vector<int> slots;
+    std::vector<PointTrace> traces;
+    std::vector<RetryCandidate> retry_candidates;
+    std::vector<float> flow_x, flow_y;
+    std::vector<float> guess_dist_plain_px, guess_dist_prior_px;
+    std::vector<int> free_slots;
+    int acquire() {
+      const int index = free_slots.back();
+      free_slots.pop_back();
+      return index;
+    }
+    void release(int index) { free_slots.push_back(index); }
+    void reserve(std::size_t max_points);
+    void clear();
+    // Appends another share's results after this one's (its indices shifted to match).
+    void append(const TemporalPart& other);
+  };
+  // Scratch slots per share: a point's plain and prior backward tracks.
+  static constexpr int kScratchSlots = 2;
+
   struct CameraState {
     std::array<ImagePyramid, 2> pyramids;
     int current = 0;
-    std::vector<std::uint64_t> ids, next_ids;
-    std::vector<Eigen::Vector2f> points, next_points;
+    std::vector<std::uint64_t> ids;
+    std::vector<Eigen::Vector2f> points;
     // Each point's templates in the current image (all levels), in a pool of fixed slots. The
     // backward track of one frame builds exactly the templates the next frame's forward track needs,
     // so a kept point takes over its backward slot instead of rebuilding.
-    std::vector<int> slots, next_slots;
+    std::vector<int> slots;
     std::vector<PatchTemplate> pool;
     std::vector<int> free_slots;
     // Per slot, how many of its levels (from level 0) hold templates. A round-trip check builds only
@@ -131,16 +173,16 @@ class KltFrontend {
     int num_levels = 0;
     IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     // retry_previous_flow: the median displacement of the last temporal step's kept tracks (zero
-    // before any), and that step's displacements per axis as scratch for the median.
+    // before any).
     Eigen::Vector2f previous_flow = Eigen::Vector2f::Zero();
-    std::vector<float> flow_x, flow_y;
-    // The points every guess lost this frame, waiting for the frame-level retry decision; each
-    // still holds its templates (slot).
-    std::vector<RetryCandidate> retry_candidates;
-    std::vector<PointTrace> traces;
-    // This frame's FrontendStats::guess_dist_* of this camera, appended to the stats by endFrame
-    // (left camera first): the cameras may be tracked concurrently.
-    std::vector<float> guess_dist_plain_px, guess_dist_prior_px;
+    // This frame's prior field (beginCamera) and whether it was bridged from an earlier P-frame.
+    const MotionField* field = nullptr;
+    bool field_bridged = false;
+    // The temporal step's shares, and the step joined (the retry decides its candidates there). Its
+    // traces and guess distances are the frame's for this camera, its guess distances appended to
+    // the stats by endFrame (left camera first): the cameras may be tracked concurrently.
+    std::array<TemporalPart, 2> parts;
+    TemporalPart step;
     const ImagePyramid& cur() const { return pyramids[static_cast<std::size_t>(current)]; }
     const ImagePyramid& prev() const { return pyramids[static_cast<std::size_t>(1 - current)]; }
     std::span<PatchTemplate> slot(int index) {
@@ -218,12 +260,11 @@ class KltFrontend {
   const MotionField* priorField(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
   // thin_when_full_px: drops the younger of two left tracks too close together, in both cameras.
   void thinTracks(FrontendStats& stats);
-  void trackTemporal(int camera, const MotionField* field, FrontendStats& stats);
   // The statistics and the image flow of a point the temporal step kept at tracked.
-  void countKept(CameraState& cam, TemporalStats& ts, const Eigen::Vector2f& tracked, const PointTrace& trace) const;
-  // retry_previous_flow on the points every guess lost, when they are enough of the frame's
-  // (retry_min_lost_fraction); the others are lost and get slot -1. True when any was lost.
-  bool retryFromPreviousFlow(CameraState& cam, TemporalStats& ts);
+  void countKept(TemporalPart& out, const Eigen::Vector2f& tracked, const PointTrace& trace) const;
+  // retry_previous_flow on the points every guess lost (cam.step), when they are enough of the
+  // frame's (retry_min_lost_fraction); the others are lost and get slot -1. True when any was lost.
+  bool retryFromPreviousFlow(CameraState& cam);
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
