@@ -111,6 +111,18 @@ class HelperStage final : public Stage {
   std::unique_ptr<StageHelper> helper_;
 };
 
+// The `--profile` table of a report, as printLatencyReport writes it.
+std::string latencyReportText(const RunReport& report) {
+  char* buffer = nullptr;
+  std::size_t size = 0;
+  std::FILE* out = open_memstream(&buffer, &size);
+  printLatencyReport(report, out);
+  std::fclose(out);
+  std::string text(buffer, size);
+  std::free(buffer);
+  return text;
+}
+
 // The lowest core this process may run on.
 int firstAllowedCore() {
   cpu_set_t set;
@@ -479,14 +491,8 @@ TEST_CASE("pipeline: a stage's helper thread gets its own trace track and profil
     CHECK(read.stages[2].helper_service.quantileNs(q) == stage.helper_service.quantileNs(q));
     CHECK(read.stages[2].helper_cpu.quantileNs(q) == stage.helper_cpu.quantileNs(q));
   }
-  char* buffer = nullptr;
-  std::size_t size = 0;
-  std::FILE* out = open_memstream(&buffer, &size);
-  printLatencyReport(read, out);
-  std::fclose(out);
-  const std::string printed(buffer, size);
-  std::free(buffer);
-  CHECK(printed.find("+ helper") != std::string::npos);
+  CHECK(latencyReportText(read).find("+ helper") != std::string::npos);
+  CHECK(latencyReportText(read) == latencyReportText(report));
 
   std::ifstream in(dir / "trace.json");
   const nlohmann::json events = nlohmann::json::parse(in);
@@ -583,17 +589,7 @@ TEST_CASE("pipeline: the Chrome trace reads back to the run's own latency statis
   }
   CHECK(read.end_to_end.quantileNs(0.99) == report.end_to_end.quantileNs(0.99));
   // The printed tables are the same text.
-  const auto printed = [](const RunReport& r) {
-    char* buffer = nullptr;
-    std::size_t size = 0;
-    std::FILE* out = open_memstream(&buffer, &size);
-    printLatencyReport(r, out);
-    std::fclose(out);
-    std::string text(buffer, size);
-    std::free(buffer);
-    return text;
-  };
-  CHECK(printed(read) == printed(report));
+  CHECK(latencyReportText(read) == latencyReportText(report));
 
   // A trace cut off mid-run (the process was killed) still reads.
   std::string text;

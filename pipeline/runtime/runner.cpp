@@ -367,16 +367,16 @@ struct Pipeline::Impl final : StageContext {
     }
     helper_cores.assign(static_cast<std::size_t>(n), -1);
     for (const auto& [name, core] : options.pins) {
-      // "<stage>.helper" names the helper thread of a stage that runs one.
-      constexpr std::string_view kHelperSuffix = ".helper";
-      const bool for_helper = name.ends_with(kHelperSuffix);
-      const std::string stage_name = for_helper ? name.substr(0, name.size() - kHelperSuffix.size()) : name;
+      // helperPinName() names the helper thread of a stage that runs one.
+      const std::string suffix = helperPinName("");
+      const bool for_helper = name.size() > suffix.size() && name.ends_with(suffix);
+      const std::string stage_name = for_helper ? name.substr(0, name.size() - suffix.size()) : name;
       const auto it = std::find(names.begin(), names.end(), stage_name);
       if (it == names.end()) {
         std::string known;
         for (std::size_t k = 0; k < names.size(); ++k) {
           known += (known.empty() ? "" : ", ") + names[k];
-          if (k > 0 && stages[k - 1]->usesHelper()) known += ", " + names[k] + std::string(kHelperSuffix);
+          if (k > 0 && stages[k - 1]->usesHelper()) known += ", " + helperPinName(names[k]);
         }
         throw InputError(fmt::format("pin: no stage named \"{}\" in this pipeline (stages: {})", name, known));
       }
@@ -399,6 +399,8 @@ struct Pipeline::Impl final : StageContext {
     }
   }
 };
+
+std::string helperPinName(std::string_view stage) { return std::string(stage) + ".helper"; }
 
 std::vector<std::pair<std::string, int>> parseStagePins(std::string_view text) {
   std::vector<std::pair<std::string, int>> pins;

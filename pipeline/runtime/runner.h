@@ -103,6 +103,8 @@ struct RunReport {
 // Parses a stage-to-core map, "decode:0,frontend:0,backend:1" (stage names as the pipeline reports
 // them: read, decode, frontend, backend, write). Throws InputError naming the malformed entry.
 std::vector<std::pair<std::string, int>> parseStagePins(std::string_view text);
+// The pin-map name of a stage's helper thread (Stage::usesHelper): "<stage>.helper".
+std::string helperPinName(std::string_view stage);
 
 class Pipeline {
  public:

@@ -203,7 +203,8 @@ VoRunResult runOnStream(const VoRunOptions& options) {
 int frontendCameraThreads(const VoRunOptions& options) {
   if (options.frontend_camera_threads != 0) return options.frontend_camera_threads;
   const auto& pins = options.pipeline.pins;
-  if (std::any_of(pins.begin(), pins.end(), [](const auto& pin) { return pin.first == "frontend.helper"; })) return 2;
+  const std::string helper_pin = pipeline::helperPinName("frontend");
+  if (std::any_of(pins.begin(), pins.end(), [&](const auto& pin) { return pin.first == helper_pin; })) return 2;
   const bool staged = options.pipeline.threads != 1;
   return staged && options.pipeline.pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
 }

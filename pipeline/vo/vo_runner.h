@@ -60,8 +60,9 @@ struct VoRunOptions {
   bool strict = false;       // stop at the first damaged frame instead of skipping it
   bool progress = true;      // progress lines on stderr
   // Threads the frontend tracks the two cameras on: 1, or 2 (a helper thread tracks the right camera
-  // and the left camera's last points, about half of all points; the same results). 0: 2 when the stages have threads
-  // of their own (pipeline.threads != 1), no stage is pinned, and the process may use two cores or more; else 1.
+  // and the left camera's last points, about half of all points; the same results). 0: 2 when the
+  // pins name the helper ("frontend.helper"), or when the stages have threads of their own
+  // (pipeline.threads != 1), no stage is pinned, and the process may use two cores or more; else 1.
   int frontend_camera_threads = 0;
 };
 

@@ -208,6 +208,7 @@ void KltFrontend::TemporalPart::append(const TemporalPart& other) {
 
 void KltFrontend::CameraState::resetSlots() {
   free_slots.clear();
+  for (TemporalPart& part : parts) part.free_slots.clear();  // a step cut short may have left scratch slots there
   const int count = static_cast<int>(pool.size()) / num_levels;
   for (int i = count - 1; i >= 0; --i) free_slots.push_back(i);
   slots.clear();
