@@ -206,7 +206,7 @@ int frontendCameraThreads(const VoRunOptions& options) {
   const std::string helper_pin = pipeline::helperPinName("frontend");
   if (std::any_of(pins.begin(), pins.end(), [&](const auto& pin) { return pin.first == helper_pin; })) return 2;
   const bool staged = options.pipeline.threads != 1;
-  return staged && options.pipeline.pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
+  return staged && pins.empty() && platform::availableCores() >= 2 ? 2 : 1;
 }
 
 }  // namespace
