@@ -67,6 +67,7 @@ class WriteSuite(unittest.TestCase):
             suite = json.loads((out / "suite.json").read_text())
             self.assertEqual(suite["bitrates"], ["raw", "250k", "500k"])
             self.assertIn("mv_parallel_of", suite["modes"])
+            self.assertIn("mv", suite["modes"])  # the shipped configs' mode
             by_name = {s["name"]: s for s in suite["sequences"]}
             self.assertEqual(sorted(by_name), ["euroc_MH_03_medium-blur", "kitti06", "tumvi_room1_512_16-clean"])
             blur = by_name["euroc_MH_03_medium-blur"]

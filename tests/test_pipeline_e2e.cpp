@@ -232,8 +232,12 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   pipeline::VoRunOptions options = quietRun(rendered().video, dir / "default.txt", 1);
   const pipeline::VoRunResult by_default = pipeline::runVisualOdometry(options);
   REQUIRE_FALSE(by_default.pipeline.error);
-  // The shipped prior_agree_radius_px is in force, and its skipped prior tracks reach the totals.
-  CHECK(by_default.frontend.prior_confirmed > 0);
+  // The shipped mode is in force: where a point has a vector only the vector's track runs (`mv`), so
+  // no prior track was skipped for a plain one or rescued a plain one.
+  CHECK(by_default.config.frontend.prior_mode == PriorMode::kMv);
+  CHECK(by_default.frontend.tracked_prior > by_default.frontend.tracked_plain);
+  CHECK(by_default.frontend.prior_confirmed == 0);
+  CHECK(by_default.frontend.rescued == 0);
   options.trajectory_file = dir / "euroc.txt";
   options.config = fs::path("euroc");
   REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
