@@ -242,6 +242,13 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   options.config = fs::path("euroc");
   REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
   CHECK(fileText(dir / "default.txt") == fileText(dir / "euroc.txt"));
+  // In the paper's mode the same file's prior_agree_radius_px is in force, and the prior tracks it
+  // skips reach the run's totals (the only positive check of that sum through the pipeline).
+  options.trajectory_file = dir / "parallel.txt";
+  options.mode = PriorMode::kMvParallelOf;
+  const pipeline::VoRunResult parallel = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(parallel.pipeline.error);
+  CHECK(parallel.frontend.prior_confirmed > 0);
 }
 
 TEST_CASE("pipeline e2e: a later start frame tracks from that frame; a video is still decoded from its start") {
