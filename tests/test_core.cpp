@@ -2,10 +2,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
+#include "platform/process/child_process.h"
 #include "platform/realtime/clock.h"
 #include "voca/core/quantile.h"
 
@@ -61,4 +65,29 @@ TEST_CASE("thread CPU clock counts this thread's work, not its sleep") {
   // never more than the wall time it took (plus clock granularity).
   CHECK(busy_ns > 1'000'000);
   CHECK(busy_ns <= voca::platform::monotonicNs() - wall_start + 1'000'000);
+}
+
+TEST_CASE("runForked reports the copy's exit code, its stderr and a crash, and this process goes on") {
+  int touched = 0;
+  const voca::platform::ForkedRun fine = voca::platform::runForked([&] {
+    touched = 1;  // the copy's memory, not this process's
+    std::fprintf(stderr, "[codec @ 0x1] a reason\n");
+    return 3;
+  });
+  CHECK(fine.exit.signal == 0);
+  CHECK(fine.exit.exit_code == 3);
+  CHECK(!fine.exit.succeeded());
+  CHECK(fine.output == "[codec @ 0x1] a reason\n");
+  CHECK(touched == 0);
+
+  CHECK(voca::platform::runForked([] { return 0; }).exit.succeeded());
+  CHECK(voca::platform::runForked([]() -> int { throw std::runtime_error("x"); }).exit.exit_code == 1);
+
+  const voca::platform::ForkedRun crash = voca::platform::runForked([] {
+    std::signal(SIGABRT, SIG_DFL);
+    std::abort();
+    return 0;
+  });
+  CHECK(crash.exit.signal == SIGABRT);
+  CHECK(voca::platform::describeExit(crash.exit).find("signal") != std::string::npos);
 }

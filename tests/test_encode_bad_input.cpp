@@ -90,6 +90,42 @@ TEST_CASE("encoder settings and outputs that cannot work are InputErrors") {
   CHECK(contains(inputErrorOf([&] { encoder.encode(wrong.view(), 0); }), "32x48"));
 }
 
+TEST_CASE("an MPEG second pass that cannot reach the bitrate is an InputError, not a heap corruption") {
+  // libavcodec 5.1 frees the rate control twice when mpegvideo's second pass refuses the bitrate;
+  // the encoder tries that open in a forked copy first, so this process lives to report it.
+  test::ScratchDir dir("encode-bad-pass2");
+  // Noise: the first pass codes every block with vectors and headers that 2 kbit/s cannot hold.
+  std::vector<GrayImage> frames;
+  std::uint32_t state = 12345;
+  for (int f = 0; f < 20; ++f) {
+    GrayImage image(160, 120, 0);
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) {
+        state = state * 1664525u + 1013904223u;
+        image(x, y) = static_cast<std::uint8_t>(state >> 24);
+      }
+    frames.push_back(std::move(image));
+  }
+  const FrameSource noise = [&](const std::function<void(GrayView)>& emit) {
+    for (const GrayImage& image : frames) emit(image.view());
+  };
+  for (const char* codec_name : {"mpeg2video", "mpeg4"}) {
+    CAPTURE(codec_name);
+    EncoderSettings settings = test::testSettings();
+    settings.codec = codec_name;
+    settings.two_pass = true;
+    settings.bitrate_bps = 2000;
+    const std::string message = inputErrorOf([&] { encodeVideoFile(dir / "v.mp4", settings, noise); });
+    CHECK(contains(message, codec_name));
+    CHECK(contains(message, "two passes"));
+    CHECK(contains(message, "bitrate"));  // libavcodec's own reason
+    CHECK(!std::filesystem::exists(dir / "v.mp4"));
+    // The same clip at a bitrate it can reach still encodes in two passes.
+    settings.bitrate_bps = 4000000;
+    CHECK(encodeVideoFile(dir / "ok.mp4", settings, noise).achieved_bitrate_bps > 0.0);
+  }
+}
+
 TEST_CASE("dataset problems are InputErrors naming the folder") {
   test::ScratchDir dir("encode-bad-dataset");
   DatasetEncodeOptions options;

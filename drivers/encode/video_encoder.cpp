@@ -25,6 +25,7 @@ extern "C" {
 }
 
 #include "platform/filesystem/temp_dir.h"
+#include "platform/process/child_process.h"
 #include "voca/core/error.h"
 
 namespace voca::encode {
@@ -130,6 +131,34 @@ BufferPtr createVaapiFrames(AVBufferRef* device, int width, int height) {
     throw RuntimeFailure(fmt::format("cannot create {}x{} VAAPI surfaces: {}", width, height, avError(r)));
   }
   return frames;
+}
+
+// libavcodec 5.1's mpegvideo encoders (mpeg4, mpeg2video) free their rate-control state twice when
+// the second pass cannot reach the bitrate (init_pass2 fails: the first pass's headers and vectors
+// alone exceed it, or no quantiser gets below it), which corrupts the heap and aborts the process.
+// So the second pass is opened in a forked copy first; a refusal there becomes an InputError here,
+// with libavcodec's own reason.
+void checkSecondPassOpens(AVCodecContext* ctx, const AVCodec* codec, const EncoderSettings& settings) {
+  const platform::ForkedRun trial = platform::runForked([&] {
+    av_log_set_level(AV_LOG_ERROR);
+    return avcodec_open2(ctx, codec, nullptr) < 0 ? 1 : 0;
+  });
+  if (trial.exit.succeeded()) return;
+  // libavcodec's messages ("[mpeg2video @ 0x...] requested bitrate is too low"), without the heap
+  // checker's report that may follow them.
+  std::string reason;
+  std::istringstream lines(trial.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line.front() != '[') continue;
+    const std::size_t tag_end = line.find("] ");
+    reason +=
+        fmt::format("{}{}", reason.empty() ? "" : "; ", tag_end == std::string::npos ? line : line.substr(tag_end + 2));
+  }
+  if (reason.empty()) reason = platform::describeExit(trial.exit);
+  throw InputError(
+      fmt::format("the {} encoder cannot reach {} bit/s on this video in two passes ({}); raise the "
+                  "bitrate or encode in one pass",
+                  settings.codec, settings.bitrate_bps, reason));
 }
 
 }  // namespace
@@ -327,6 +356,7 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
       ctx->stats_in = av_strdup(readWholeFile(stats_file).c_str());
     }
   }
+  if (pass == EncoderPass::kSecond && settings.codec != "libx264") checkSecondPassOpens(ctx.get(), codec, settings);
   const int ret = avcodec_open2(ctx.get(), codec, &options);
   std::string unused;
   for (const AVDictionaryEntry* e = av_dict_get(options, "", nullptr, AV_DICT_IGNORE_SUFFIX); e != nullptr;

@@ -5,7 +5,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <system_error>
 
@@ -73,6 +76,53 @@ std::optional<ChildExit> pollChild(pid_t pid) {
   if (ended < 0) throw RuntimeFailure(fmt::format("waiting for child process {}: {}", pid, std::strerror(errno)));
   if (ended == 0) return std::nullopt;
   return decodeStatus(ended, status);
+}
+
+ForkedRun runForked(const std::function<int()>& work) {
+  std::array<int, 2> pipe_ends{};
+  if (::pipe(pipe_ends.data()) != 0)
+    throw RuntimeFailure(fmt::format("cannot create a pipe: {}", std::strerror(errno)));
+  std::fflush(nullptr);  // else the copy would write this process's buffered output a second time
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int error = errno;
+    ::close(pipe_ends[0]);
+    ::close(pipe_ends[1]);
+    throw RuntimeFailure(fmt::format("cannot fork: {}", std::strerror(error)));
+  }
+  if (pid == 0) {
+    ::close(pipe_ends[0]);
+    ::dup2(pipe_ends[1], STDERR_FILENO);
+    ::close(pipe_ends[1]);
+    int code = 1;
+    try {
+      code = work();
+    } catch (...) {
+      code = 1;
+    }
+    std::fflush(nullptr);
+    ::_exit(code);  // no exit handlers or destructors: they belong to the original process
+  }
+  ::close(pipe_ends[1]);
+  ForkedRun run;
+  constexpr std::size_t kMaxOutput = 64 * 1024;
+  std::array<char, 4096> buffer{};
+  while (true) {
+    const ssize_t got = ::read(pipe_ends[0], buffer.data(), buffer.size());
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) break;
+    const std::size_t room = kMaxOutput - std::min(kMaxOutput, run.output.size());
+    run.output.append(buffer.data(), std::min(room, static_cast<std::size_t>(got)));
+  }
+  ::close(pipe_ends[0]);
+  int status = 0;
+  pid_t ended = -1;
+  do {
+    ended = ::waitpid(pid, &status, 0);
+  } while (ended < 0 && errno == EINTR);
+  if (ended < 0) throw RuntimeFailure(fmt::format("waiting for a forked copy: {}", std::strerror(errno)));
+  run.exit = decodeStatus(pid, status);
+  return run;
 }
 
 std::filesystem::path currentExecutable(const std::string& argv0) {

@@ -6,6 +6,7 @@
 #include <sys/types.h>
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,6 +33,19 @@ ChildExit waitForAnyChild();
 // The exit of child pid if it has ended, without blocking (nullopt while it runs), for callers that
 // report progress while they wait. Throws RuntimeFailure when pid is not a child of this process.
 std::optional<ChildExit> pollChild(pid_t pid);
+
+// How a forked copy of this process ended (runForked), with what it wrote to its stderr.
+struct ForkedRun {
+  ChildExit exit;
+  std::string output;  // the copy's stderr, at most its first 64 KiB
+};
+
+// Runs `work` in a forked copy of this process and waits for the copy to end; its exit code is
+// work()'s return value (1 when work throws). For a library call that may corrupt the heap when it
+// fails, to learn whether it succeeds without that happening here. The copy has only the calling
+// thread, so `work` must not need a lock another thread may hold: call it where no other thread of
+// this process runs library code. Throws RuntimeFailure when the copy cannot be made.
+ForkedRun runForked(const std::function<int()>& work);
 
 // The running program's own executable (to start more of itself), from /proc/self/exe; falls back
 // to the given argv0 when /proc is not mounted.
