@@ -183,8 +183,19 @@ TEST_CASE("voca synth rejects bad options with a clear error") {
   CHECK(runVoca("synth --out " + (scratch / "g").string() + " --exposure 60") == 1 << 8);  // > one 50 ms period
   CHECK(runVoca("synth --out " + (scratch / "h").string() + " --gain 0") == 1 << 8);
   CHECK(runVoca("synth --out " + (scratch / "i").string() + " --start 2") == 1 << 8);  // needs --trajectory
-  // Two sources of motion at once is a usage error (CLI11's own exit code), not a silent choice.
-  CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") != 0);
+  // Too long to render: refused before any per-frame memory (1e8 s once grew without bound).
+  for (const char* seconds : {"1e8", "1e9"}) {
+    const voca::test::CommandOutput result =
+        voca::test::runVocaOutput("synth --out " + (scratch / "j").string() + " --seconds " + seconds);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("at most 1000000 frames") != std::string::npos);
+    CHECK(!fs::exists(scratch / "j"));
+  }
+  // Two sources of motion at once is a usage error (exit code 2), not a silent choice.
+  CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") == 2 << 8);
+  CHECK(runVoca("synth --out " + (scratch / "k").string() + " --no-such-option") == 2 << 8);
+  CHECK(runVoca("synth --help") == 0);
 }
 
 TEST_CASE("voca synth --camera: a path that does not exist is named as not found; other names get the choices") {

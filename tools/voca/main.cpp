@@ -27,6 +27,11 @@ const std::vector<CommandSpec>& registeredCommands() { return registry(); }
 
 }  // namespace voca::cli
 
+namespace {
+// A command line that does not parse: an unknown option, a missing or malformed value.
+constexpr int kUsageExitCode = 2;
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace voca::cli;
   CLI::App app{
@@ -55,7 +60,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version end here too (CLI11 code 0); every other parse error is a usage error,
+    // exit code 2 (CLI11's own codes, 101-127, would read as a crash's or a signal's).
+    return app.exit(e) == 0 ? 0 : kUsageExitCode;
   }
 
   for (auto& [sub, run] : runners) {
