@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "voca/frontend/detector.h"
@@ -269,4 +270,30 @@ TEST_CASE("detector: blocked cells get no corner; the others the same as without
   // A mask for another grid is an error, not a silent misreading.
   const std::vector<std::uint8_t> wrong(5, 0);
   CHECK_THROWS_AS(detector.detect(image.view(), {}, DetectorParams{}, 64, with_mask, wrong), std::invalid_argument);
+}
+
+TEST_CASE("detector: detectionCells counts the cells detect() can fill, known answers and on noise") {
+  CHECK(detectionCells(752, 480, 40, 19) == 19 * 12);  // EuRoC: every cell reaches inside the border
+  CHECK(detectionCells(96, 64, 40, 19) == 2 * 2);
+  CHECK(detectionCells(752, 480, 40, 300) == 0);  // the border leaves no row
+  CHECK(detectionCells(8, 8, 4, 0) == 2 * 2);     // a border below 3 px counts as 3, as in detect()
+  CHECK(detectionCells(100, 100, 0, 19) == 0);
+  // Noise holds corners everywhere: an empty image gets exactly one corner per such cell.
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> grey(0, 255);
+  for (const auto& [w, h, grid, border] : {std::tuple{160, 120, 40, 19}, std::tuple{157, 113, 23, 7},
+                                           std::tuple{96, 64, 40, 19}, std::tuple{41, 39, 16, 2}}) {
+    CAPTURE(w);
+    CAPTURE(grid);
+    GrayImage image(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) image(x, y) = static_cast<std::uint8_t>(grey(rng));
+    DetectorParams params;
+    params.border_px = border;
+    params.min_threshold = 0;  // down to threshold 0, so that every cell with room finds its corner
+    GridDetector detector(w, h, grid);
+    std::vector<Eigen::Vector2f> corners;
+    corners.reserve(1000);
+    CHECK(detector.detect(image.view(), {}, params, 1000, corners) == detectionCells(w, h, grid, border));
+  }
 }

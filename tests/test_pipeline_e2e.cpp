@@ -434,6 +434,31 @@ TEST_CASE("pipeline e2e: a failure with few right-camera points hints at stereo_
   CHECK(loose.text.find("hint: the right camera") == std::string::npos);
 }
 
+TEST_CASE("pipeline e2e: a run that estimates no pose is an error naming the likeliest cause; its files stay") {
+  test::ScratchDir dir("pipeline-no-estimate");
+  const fs::path trajectory = dir / "traj.txt";
+  const std::string run = "run " + rendered().video.string() + " --threads 1 -o " + trajectory.string();
+  // A detection border that leaves no cell: no corner anywhere, every frame lost.
+  const fs::path config = dir / "border.json";
+  std::ofstream(config) << R"({"frontend": {"detection_border_px": 300}})";
+  const test::CommandOutput no_cells = test::runVocaOutput(run + " --config " + config.string());
+  INFO(no_cells.text);
+  CHECK(no_cells.exit_code == 1);
+  CHECK(no_cells.text.find("error: no pose was estimated: all 40 frames were lost") != std::string::npos);
+  CHECK(no_cells.text.find("hold 0 grid cells for corners") != std::string::npos);
+  CHECK(fs::exists(trajectory));
+  // Too few points for another reason: the generic hint.
+  const test::CommandOutput one_point = test::runVocaOutput(run + " --max-points 1");
+  INFO(one_point.text);
+  CHECK(one_point.exit_code == 1);
+  CHECK(one_point.text.find("error: no pose was estimated") != std::string::npos);
+  CHECK(one_point.text.find("Check the calibration") != std::string::npos);
+  // The same video with the default settings estimates its poses: no error.
+  const test::CommandOutput normal = test::runVocaOutput(run);
+  CHECK(normal.exit_code == 0);
+  CHECK(normal.text.find("no pose was estimated") == std::string::npos);
+}
+
 TEST_CASE("pipeline e2e: a failure where the tracker lost most points hints at retry_previous_flow, once") {
   // Twelve frames cut out of the fast sequence: the image jumps far beyond the pyramid's reach.
   test::ScratchDir dir("pipeline-jump");

@@ -25,6 +25,7 @@
 #include "platform/realtime/thread_control.h"
 #include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
+#include "voca/frontend/detector.h"
 
 namespace voca::pipeline {
 
@@ -120,6 +121,26 @@ class ProgressSink final : public FrameSink {
   std::int64_t frames_ = 0;
   platform::ProgressLine line_;
 };
+
+// VoRunResult::failure for a run whose every frame was lost, with the likeliest cause: images too
+// small for the detection grid to give a frame the points the estimator needs, else calibration
+// or config (the per-frame messages name each frame's reason).
+std::string noEstimateReason(const VoRunResult& result) {
+  const FrontendConfig& tracker = result.config.frontend;
+  const int cells = detectionCells(result.width, result.height, tracker.grid_size_px, tracker.detection_border_px);
+  std::string reason = fmt::format("no pose was estimated: all {} frames were lost", result.frames);
+  if (cells < result.config.backend.min_inliers) {
+    return reason + fmt::format(
+                        ". The {}x{} images hold {} grid cells for corners (frontend grid_size_px {}, "
+                        "detection_border_px {}), fewer than the {} points a frame needs (backend min_inliers): "
+                        "lower those keys in the config",
+                        result.width, result.height, cells, tracker.grid_size_px, tracker.detection_border_px,
+                        result.config.backend.min_inliers);
+  }
+  return reason +
+         ". Check the calibration (image size, intrinsics, the cameras' relative pose) and the config; the "
+         "messages above give each frame's reason";
+}
 
 }  // namespace
 
@@ -382,6 +403,10 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   result.rows = statistics.rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
+  if (options.estimate && !result.pipeline.stopped && !result.pipeline.error && result.frames > 0 &&
+      result.backend.keyframes == 0 && result.backend.lost >= result.frames) {
+    result.failure = noEstimateReason(result);
+  }
 
   if (options.estimate && options.keep_trajectory && ground_truth && !result.trajectory.poses.empty()) {
     result.ground_truth = ground_truth_name;

@@ -87,6 +87,9 @@ struct VoRunResult {
   SourceCounters source;  // frames the live source lost or could not pair
   int stop_signal = 0;    // the signal that stopped the run early (0: none)
   std::vector<std::string> warnings;
+  // Why the run estimated nothing (every frame lost), with a hint at the cause; empty otherwise.
+  // Commands report it as an error and exit non-zero: the trajectory holds no estimate.
+  std::string failure;
 };
 
 // Encodes a raw dataset the way the paper did (two-pass libx264 at bitrate_bps, its x264 options) into

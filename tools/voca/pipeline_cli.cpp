@@ -90,9 +90,9 @@ std::string pipelineHelpFooter() {
          "A damaged frame (video data that cannot be decoded; an image file that cannot be read, which a\n"
          "warning names) is skipped and listed (--strict stops instead). Poses are written and flushed as\n"
          "they are estimated.\n"
-         "Exit codes: 0 done; 1 bad input or a stage failed (what was estimated is written); 130 stopped by\n"
-         "SIGINT (Ctrl-C), 143 by SIGTERM, after writing everything estimated so far; a second signal exits at\n"
-         "once.";
+         "Exit codes: 0 done; 1 bad input, a stage failed, or no pose was estimated (every frame lost; what\n"
+         "was written stays); 2 bad command-line options; 130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM,\n"
+         "after writing everything estimated so far; a second signal exits at once.";
 }
 
 int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
@@ -104,6 +104,10 @@ int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, co
     const pipeline::StageError& e = *result.pipeline.error;
     fmt::print(stderr, "voca {}: error: {} stage failed{}: {}\n", command, e.stage,
                e.frame_index >= 0 ? fmt::format(" at frame {}", e.frame_index) : std::string(), e.message);
+    return 1;
+  }
+  if (!result.failure.empty()) {
+    fmt::print(stderr, "voca {}: error: {}\n", command, result.failure);
     return 1;
   }
   if (result.stop_signal != 0) {

@@ -161,6 +161,19 @@ int cornerResponse(GrayView image, int x, int y, int threshold) {
   return response;
 }
 
+int detectionCells(int width, int height, int grid_size_px, int border_px) {
+  if (grid_size_px <= 0) return 0;
+  const int border = std::max(border_px, 3);  // as detect(): the segment test's circle needs 3 px
+  const auto cellsAlong = [&](int size) {
+    int cells = 0;
+    for (int start = 0; start < size; start += grid_size_px) {
+      cells += std::max(start, border) < std::min(start + grid_size_px, size - border) ? 1 : 0;
+    }
+    return cells;
+  };
+  return cellsAlong(width) * cellsAlong(height);
+}
+
 GridDetector::GridDetector(int max_width, int max_height, int grid_size_px) : grid_size_px_(grid_size_px) {
   if (grid_size_px <= 0) throw std::invalid_argument("GridDetector: grid size must be positive");
   const int cells_x = (max_width + grid_size_px - 1) / grid_size_px;

@@ -27,6 +27,10 @@ struct DetectorParams {
 // (x, y) must be at least 3 pixels inside the image.
 int cornerResponse(GrayView image, int x, int y, int threshold);
 
+// The grid cells of a width x height image that can hold a corner: those with pixels at least
+// border_px (and 3) from every edge. detect() adds at most one new corner per cell and frame.
+int detectionCells(int width, int height, int grid_size_px, int border_px);
+
 // Fills empty grid cells of an image with corners. Cell (i, j) covers pixels [i g, (i+1) g) x
 // [j g, (j+1) g); a cell is empty when no existing point rounds into it. Buffers are sized for the
 // largest image at construction; detect() does not allocate.
