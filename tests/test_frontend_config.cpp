@@ -130,6 +130,10 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
 
   message = errorFor(R"({"frontend": {"pyramid_levels": 9}})");
   CHECK(contains(message, "frontend.pyramid_levels: expected an integer in [0, 6], got 9"));
+  // A key bounded by another names it: lowering pyramid_levels can put prior_pyramid_levels out of range.
+  message = errorFor(R"({"frontend": {"pyramid_levels": 0, "prior_pyramid_levels": 1}})");
+  CHECK(contains(message,
+                 "frontend.prior_pyramid_levels: expected an integer in [-1, 0] (at most pyramid_levels), got 1"));
 
   message = errorFor(R"({"frontend": {"max_recovered_dist2_px2": 0}})");
   CHECK(contains(message, "frontend.max_recovered_dist2_px2: expected a number in (0, 100], got 0"));
@@ -171,17 +175,22 @@ TEST_CASE("config: unknown keys, wrong types and out-of-range values name the ke
   CHECK(contains(message, "frontend.bridge_iframes: expected true or false"));
 
   message = errorFor(R"({"frontend": {"detection_min_threshold": 50}})");
-  CHECK(contains(message, "frontend.detection_min_threshold: expected an integer in [1, 40], got 50"));
+  CHECK(contains(
+      message,
+      "frontend.detection_min_threshold: expected an integer in [1, 40] (at most detection_max_threshold), got "
+      "50"));
 
   message = errorFor(R"({"frontend": {"min_step_px": 0}})");
   CHECK(contains(message, "frontend.min_step_px: expected a number in (0, 10], got 0"));
   message = errorFor(R"({"frontend": {"coarse_min_step_px": -1}})");
   CHECK(contains(message, "frontend.coarse_min_step_px"));
   message = errorFor(R"({"frontend": {"pyramid_levels": 2, "backward_pyramid_levels": 3}})");
-  CHECK(contains(message, "frontend.backward_pyramid_levels: expected an integer in [-1, 2], got 3"));
+  CHECK(contains(message,
+                 "frontend.backward_pyramid_levels: expected an integer in [-1, 2] (at most pyramid_levels), got 3"));
   // At most the pyramid the plain guess uses; -1 means all of it.
   message = errorFor(R"({"frontend": {"pyramid_levels": 2, "prior_pyramid_levels": 3}})");
-  CHECK(contains(message, "frontend.prior_pyramid_levels: expected an integer in [-1, 2], got 3"));
+  CHECK(contains(message,
+                 "frontend.prior_pyramid_levels: expected an integer in [-1, 2] (at most pyramid_levels), got 3"));
   message = errorFor(R"({"frontend": {"prior_agree_radius_px": -0.5}})");
   CHECK(contains(message, "frontend.prior_agree_radius_px: expected a number in [0,"));
   message = errorFor(R"({"frontend": {"prior_rescue_min_px": -1}})");

@@ -76,9 +76,12 @@ std::optional<StereoGuess> parseStereoGuess(std::string_view name) {
 
 namespace {
 
-void checkInt(const std::string& context, const char* key, int value, int lo, int hi) {
+// hi_key: the key of the same section whose value is the upper bound, named in the message (a file
+// that lowers that key can put another key's value out of range).
+void checkInt(const std::string& context, const char* key, int value, int lo, int hi, const char* hi_key = nullptr) {
   if (value < lo || value > hi) {
-    throw InputError(fmt::format("{}.{}: expected an integer in [{}, {}], got {}", context, key, lo, hi, value));
+    throw InputError(fmt::format("{}.{}: expected an integer in [{}, {}]{}, got {}", context, key, lo, hi,
+                                 hi_key != nullptr ? fmt::format(" (at most {})", hi_key) : "", value));
   }
 }
 
@@ -108,14 +111,15 @@ void validateFrontendConfig(const FrontendConfig& c, const std::string& context)
   checkReal(context, "matching_default_depth_m", c.matching_default_depth_m, 0.0, 1e4, true);
   checkReal(context, "image_safe_radius_px", c.image_safe_radius_px, 0.0, 1e5, false);
   checkInt(context, "detection_max_threshold", c.detection_max_threshold, 1, 255);
-  checkInt(context, "detection_min_threshold", c.detection_min_threshold, 1, c.detection_max_threshold);
+  checkInt(context, "detection_min_threshold", c.detection_min_threshold, 1, c.detection_max_threshold,
+           "detection_max_threshold");
   checkInt(context, "detection_border_px", c.detection_border_px, 3, 1000);
   checkReal(context, "consensus_tolerance_px2", c.consensus_tolerance_px2, 0.0, 1e4, false);
   checkInt(context, "prior_min_block_px", c.prior_min_block_px, 0, 64);
   checkReal(context, "prior_max_residual_px", c.prior_max_residual_px, 0.0, 1e3, false);
   checkInt(context, "prior_max_qp", c.prior_max_qp, 0, 127);  // H.264's 51, MPEG-2's non-linear scale 112
-  checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels);
-  checkInt(context, "backward_pyramid_levels", c.backward_pyramid_levels, -1, c.pyramid_levels);
+  checkInt(context, "prior_pyramid_levels", c.prior_pyramid_levels, -1, c.pyramid_levels, "pyramid_levels");
+  checkInt(context, "backward_pyramid_levels", c.backward_pyramid_levels, -1, c.pyramid_levels, "pyramid_levels");
   checkReal(context, "prior_agree_radius_px", c.prior_agree_radius_px, 0.0, 100.0, false);
   checkReal(context, "thin_when_full_px", c.thin_when_full_px, 0.0, 1000.0, false);
   checkReal(context, "prior_rescue_min_px", c.prior_rescue_min_px, 0.0, 1e6, false);
