@@ -3,8 +3,8 @@ voca_add_test(test_pipeline_runtime SOURCES test_pipeline_runtime.cpp LIBS voca_
 # The VO through the pipeline on rendered, micro EuRoC and KITTI data: determinism across thread
 # layouts, damaged packets, failing sources, signals to a running `voca run`, live-rate replay.
 voca_add_test(test_pipeline_e2e SOURCES test_pipeline_e2e.cpp
-              LIBS voca_pipeline_vo voca_drivers_source voca_formats_dataset voca_formats_calib voca_formats_trajectory
-              LABELS e2e TIMEOUT 900)
+              LIBS voca_pipeline_vo voca_drivers_source voca_drivers_encode_dataset voca_formats_dataset voca_formats_calib
+                   voca_formats_trajectory LABELS e2e TIMEOUT 900)
 add_dependencies(test_pipeline_e2e voca)
 # Interposes malloc (own executable): the pipeline allocates nothing per frame beyond what FFmpeg's
 # demuxer and decoder allocate, which the test counts exactly.

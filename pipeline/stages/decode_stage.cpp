@@ -33,6 +33,11 @@ struct DecodeStage::Impl {
   // Per camera, the pts of the newest frame whose picture came out or was given up: a picture at or
   // before it comes too late (the device returned it out of order, or after the stage gave up).
   std::array<std::int64_t, 2> settled_pts{decode::kNoPts, decode::kNoPts};
+  // Per camera: a picture since the last I-picture was damaged or never came out. The pictures
+  // predicted from it carry its concealment along (the decoder copies an older picture where data is
+  // missing) and are not flagged: they show the scene displaced by the motion that was lost, which
+  // tracks as a smooth but wrong path. So they count as damaged too, until an I-picture.
+  std::array<bool, 2> references_damaged{};
   std::array<std::unique_ptr<decode::VideoDecoder>, 2> decoders;
   std::array<decode::DecodedFrame, 2> scratch;
   std::array<Pending, kMaxPending> pending;  // a ring, oldest at head
@@ -48,6 +53,7 @@ struct DecodeStage::Impl {
 
   void markDamaged(Pending& p, int camera, const std::string& why) {
     settle(p, camera);
+    references_damaged[static_cast<std::size_t>(camera)] = true;
     if (!p.damaged) p.why = fmt::format("{}: {}", options.names[static_cast<std::size_t>(camera)], why);
     p.damaged = true;
   }
@@ -77,11 +83,17 @@ struct DecodeStage::Impl {
     }
     Pending& p = at(target);
     settle(p, camera);
+    if (picture.motion.pictureType() == PictureType::kI) references_damaged[c] = false;
+    const bool predicted_from_damaged = references_damaged[c];
     DecodedStereoFrame& frame = p.slot->frame;
     // Hand the decoded buffers over without copying; the decoder keeps the slot's old ones.
     std::swap(frame.images[c], picture.luma);
     std::swap(frame.motion[c], picture.motion);
-    if (picture.damaged) markDamaged(p, camera, "damaged or missing bitstream data (concealed by the decoder)");
+    if (picture.damaged) {
+      markDamaged(p, camera, "damaged or missing bitstream data (concealed by the decoder)");
+    } else if (predicted_from_damaged) {
+      markDamaged(p, camera, "predicted from a damaged picture (no I-picture since)");
+    }
   }
 
   void decode(FrameSlot& slot, Emitter& out);

@@ -88,8 +88,9 @@ std::string pipelineHelpFooter() {
          "Offline replay never drops a frame; --realtime paces the input at its timestamps and drops the\n"
          "oldest waiting frame when the frontend falls behind (every drop is counted and listed).\n"
          "A damaged frame (video data that cannot be decoded; an image file that cannot be read, which a\n"
-         "warning names) is skipped and listed (--strict stops instead). Poses are written and flushed as\n"
-         "they are estimated.\n"
+         "warning names) is skipped and listed (--strict stops instead), and so are the video frames\n"
+         "predicted from it up to the next I-picture (they carry the decoder's concealment along). Poses are\n"
+         "written and flushed as they are estimated.\n"
          "Exit codes: 0 done; 1 bad input, a stage failed, or no pose was estimated (every frame lost; what\n"
          "was written stays); 2 bad command-line options; 130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM,\n"
          "after writing everything estimated so far; a second signal exits at once.";
