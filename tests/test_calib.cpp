@@ -132,7 +132,12 @@ TEST_CASE("malformed Basalt JSON names the file and the field") {
 
   j = basaltJson();
   j["value0"]["resolution"][0][0] = 752.5;
-  expectError(errorFor(j), "value0.resolution[0][0]: expected a positive integer, got 752.5");
+  expectError(errorFor(j), "value0.resolution[0][0]: expected an image size in pixels, 1 to 16384, got 752.5");
+
+  // Larger than any camera: refused here rather than failing to allocate the pipeline's buffers.
+  j = basaltJson();
+  j["value0"]["resolution"][1][1] = 100000;
+  expectError(errorFor(j), "value0.resolution[1][1]: expected an image size in pixels, 1 to 16384, got 100000");
 
   j = basaltJson();
   j["value0"]["T_imu_cam"].erase(1);

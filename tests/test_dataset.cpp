@@ -244,7 +244,7 @@ TEST_CASE("VOCA video layout lists videos and frame timestamps") {
   const Dataset shorter = voca::openDataset(dir / "mav0");
   CHECK(shorter.frames.size() == 2);
   REQUIRE(shorter.warnings.size() == 1);
-  expectError(shorter.warnings[0], "using the first 2 frames");
+  expectError(shorter.warnings[0], "only the first 2 rows count");
 
   fs::remove(dir / "mav0/cam1/data.mp4");
   expectError(errorOf(dir.path()), "cam1/data.mp4: missing");

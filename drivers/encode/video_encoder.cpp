@@ -192,7 +192,7 @@ std::int64_t parseBitrate(std::string_view text) {
   const double value = std::stod(std::string(number)) * scale;
   // Below 1 kbit/s no codec can hold a frame; above 10 Gbit/s it is surely a typo.
   if (!(value >= 1000.0 && value <= 1e10)) {
-    throw InputError(fmt::format("bitrate '{}' = {} bit/s is outside 1k..10G", text, value));
+    throw InputError(fmt::format("bitrate '{}' = {} bit/s is outside 1k..10000M", text, value));
   }
   return static_cast<std::int64_t>(std::llround(value));
 }

@@ -4,7 +4,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include <fmt/core.h>
 #include "formats/calib/calibration_io.h"
+
 #include "formats/calib/internal.h"
 #include "voca/core/error.h"
 
@@ -65,9 +67,12 @@ class Field {
     if (!value_.is_number()) fail(std::string("expected a number, got ") + typeName(value_));
     return value_.get<double>();
   }
-  int positiveInt() const {
-    if (!value_.is_number_integer() || value_.get<int64_t>() <= 0 || value_.get<int64_t>() > (1 << 20)) {
-      fail(std::string("expected a positive integer, got ") + (value_.is_number() ? value_.dump() : typeName(value_)));
+  // An image width or height in whole pixels.
+  int imageSide() const {
+    if (!value_.is_number_integer() || value_.get<int64_t>() <= 0 ||
+        value_.get<int64_t>() > calib_internal::kMaxImageSide) {
+      fail(fmt::format("expected an image size in pixels, 1 to {}, got {}", calib_internal::kMaxImageSide,
+                       value_.is_number() ? value_.dump() : std::string(typeName(value_))));
     }
     return static_cast<int>(value_.get<int64_t>());
   }
@@ -184,7 +189,7 @@ StereoRig loadBasaltCalibration(const fs::path& json_file) {
     const Field size = resolution.at(i);
     if (size.size() != 2) size.fail("expected [width, height]");
     rig.cameras.push_back(
-        {readCamera(intrinsics.at(i)), size.at(0).positiveInt(), size.at(1).positiveInt(), readPose(poses.at(i))});
+        {readCamera(intrinsics.at(i)), size.at(0).imageSide(), size.at(1).imageSide(), readPose(poses.at(i))});
   }
   return rig;
 }

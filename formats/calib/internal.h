@@ -18,4 +18,8 @@ SE3d toSE3(const Eigen::Matrix4d& m);
 // A rig needs at least cam0 and cam1.
 constexpr int kMinCameras = 2;
 
+// The largest image width or height a calibration may give (px): beyond any camera, and small enough
+// that the pipeline's per-image buffers can be allocated (H.264's largest level codes 8192x4320).
+constexpr int kMaxImageSide = 16384;
+
 }  // namespace voca::calib_internal

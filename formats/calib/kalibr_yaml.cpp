@@ -7,7 +7,9 @@
 #include <fstream>
 #include <sstream>
 
+#include <fmt/core.h>
 #include "formats/calib/calibration_io.h"
+
 #include "formats/calib/internal.h"
 #include "voca/core/error.h"
 
@@ -87,7 +89,9 @@ class Field {
   std::pair<int, int> resolution() const {
     const std::vector<double> size = numbers(2);
     for (double v : size) {
-      if (!(v >= 1.0 && v <= (1 << 20) && v == static_cast<int>(v))) fail("expected [width, height] in whole pixels");
+      if (!(v >= 1.0 && v <= calib_internal::kMaxImageSide && v == static_cast<int>(v))) {
+        fail(fmt::format("expected [width, height] in whole pixels, 1 to {}", calib_internal::kMaxImageSide));
+      }
     }
     return {static_cast<int>(size[0]), static_cast<int>(size[1])};
   }

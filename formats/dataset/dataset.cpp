@@ -171,7 +171,8 @@ void readVocaVideo(const fs::path& mav0, Dataset& dataset) {
   const size_t count = std::min(left.size(), right.size());
   if (left.size() != right.size()) {
     dataset.warnings.push_back("cam0/data.csv has " + std::to_string(left.size()) + " rows and cam1/data.csv " +
-                               std::to_string(right.size()) + "; using the first " + std::to_string(count) + " frames");
+                               std::to_string(right.size()) + "; the cameras pair by row, so only the first " +
+                               std::to_string(count) + " rows count");
   }
   int mismatched = 0;
   for (size_t i = 0; i < count; ++i) {
