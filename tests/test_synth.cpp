@@ -302,6 +302,19 @@ TEST_CASE("motion presets stay in the room and produce the advertised image moti
         CHECK(flow.p90_px < 80.0);
         break;
     }
+    CHECK(flow.samples > 0);
+    // A jump far out of the room between two poses: no point stays in view, and the stats say so
+    // instead of reading as a standstill.
+    const SE3d far_away(poses[0].so3(), poses[0].translation() + Eigen::Vector3d(500.0, 0.0, 0.0));
+    const std::vector<SE3d> jump = {poses[0], far_away};
+    const ImageMotionStats lost = measureImageMotion(
+        scene, rays,
+        [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
+          return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width &&
+                 uv.y() < cam0.height;
+        },
+        jump, 48);
+    CHECK(lost.samples == 0);
   }
 }
 

@@ -13,8 +13,14 @@ int runSynth(const voca::pipeline::SynthOptions& options) {
   const voca::pipeline::SynthResult result = voca::pipeline::synthesizeSequence(options);
   fmt::print(stderr, "voca synth: wrote {} ({} stereo frames, ground truth, calib.json) in {:.1f} s\n",
              options.out.string(), result.frames, result.seconds);
-  fmt::print(stderr, "voca synth: cam0 image motion per frame: median {:.1f} px, p90 {:.1f} px, max {:.1f} px\n",
-             result.motion.median_px, result.motion.p90_px, result.motion.max_px);
+  if (result.motion.samples == 0) {
+    fmt::print(stderr,
+               "voca synth: cam0 image motion per frame: not measurable, no scene point stays in view from one "
+               "frame to the next (the motion is too fast for this frame rate)\n");
+  } else {
+    fmt::print(stderr, "voca synth: cam0 image motion per frame: median {:.1f} px, p90 {:.1f} px, max {:.1f} px\n",
+               result.motion.median_px, result.motion.p90_px, result.motion.max_px);
+  }
   if (result.blur_median_px) {
     fmt::print(stderr, "voca synth: cam0 motion blur streak ({} ms exposure): median {:.1f} px, max {:.1f} px\n",
                options.exposure_ms, *result.blur_median_px, *result.blur_max_px);

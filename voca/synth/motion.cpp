@@ -158,6 +158,7 @@ ImageMotionStats measureImageMotion(const Scene& scene, const RayTable& rays, co
     }
   }
   ImageMotionStats stats;
+  stats.samples = flow.size();
   if (flow.empty()) return stats;
   stats.median_px = quantileInPlace(flow, 0.5);
   stats.p90_px = quantileInPlace(flow, 0.9);

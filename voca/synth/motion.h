@@ -3,6 +3,7 @@
 // fitting a recorded trajectory into the room, and measuring the resulting image motion.
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <span>
@@ -41,6 +42,9 @@ struct ImageMotionStats {
   double median_px = 0.0;
   double p90_px = 0.0;
   double max_px = 0.0;
+  // Pixels measured over all pose pairs. 0 when no sampled scene point stayed in view from one pose
+  // to the next (motion too fast to measure); the figures above are then 0 too, and meaningless.
+  std::size_t samples = 0;
 };
 using Project = std::function<bool(const Eigen::Vector3d& p_cam, Eigen::Vector2d& uv)>;
 ImageMotionStats measureImageMotion(const Scene& scene, const RayTable& rays, const Project& project,
