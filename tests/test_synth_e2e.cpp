@@ -106,6 +106,13 @@ TEST_CASE("voca synth writes a EuRoC folder with ground truth and calibration th
     const voca::Trajectory skipped = voca::loadTrajectory(later / "mav0" / "state_groundtruth_estimate0" / "data.csv");
     REQUIRE(skipped.poses.size() == 11);
     CHECK(skipped.poses.front().t_ns == shifted.poses[4].t_ns);
+    // Asked for more than the file holds: all it holds, and a warning that says so.
+    const voca::test::CommandOutput longer = voca::test::runVocaOutput(
+        "synth --out " + (scratch / "longer").string() + " --trajectory " + file.string() + " --rate 40 --seconds 5");
+    INFO(longer.text);
+    CHECK(longer.exit_code == 0);
+    CHECK(longer.text.find("warning: --seconds 5: " + file.string() +
+                           " from --start 0 s holds only 19 frames at 40 Hz; wrote those") != std::string::npos);
     CHECK(runVoca("synth --out " + (scratch / "late").string() + " --trajectory " + file.string() + " --start 9") ==
           1 << 8);
   }

@@ -295,6 +295,12 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   for (const SE3d& T : seq.T_world_body) T_world_cam0.push_back(T * rig.cameras[0].T_body_cam);
   SynthResult result;
   result.frames = frames;
+  if (!options.trajectory.empty() && options.seconds &&
+      static_cast<double>(frames) < std::floor(*options.seconds * options.rate_hz + 1e-9)) {
+    result.warnings.push_back(
+        fmt::format("--seconds {}: {} from --start {} s holds only {} frames at {} Hz; wrote those", *options.seconds,
+                    options.trajectory.string(), options.start_s, frames, options.rate_hz));
+  }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.motion = measureImageMotion(scene, rays[0], project_cam0, T_world_cam0, 32);
   if (!blur_px.empty()) {

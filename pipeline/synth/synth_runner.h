@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "voca/synth/motion.h"
 
@@ -42,6 +43,7 @@ struct SynthResult {
   synth::ImageMotionStats motion;        // true optical flow of cam0 between frames (coarse grid)
   std::optional<double> blur_median_px;  // cam0 motion-blur streak per frame (with an exposure only)
   std::optional<double> blur_max_px;
+  std::vector<std::string> warnings;  // e.g. a trajectory file shorter than --seconds
 };
 
 // Validates the options (InputError naming the option), renders every frame with `threads`

@@ -11,6 +11,7 @@ namespace {
 
 int runSynth(const voca::pipeline::SynthOptions& options) {
   const voca::pipeline::SynthResult result = voca::pipeline::synthesizeSequence(options);
+  for (const std::string& warning : result.warnings) fmt::print(stderr, "voca synth: warning: {}\n", warning);
   fmt::print(stderr, "voca synth: wrote {} ({} stereo frames, ground truth, calib.json) in {:.1f} s\n",
              options.out.string(), result.frames, result.seconds);
   if (result.motion.samples == 0) {
