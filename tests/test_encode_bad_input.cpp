@@ -179,7 +179,8 @@ TEST_CASE("dataset problems are InputErrors naming the folder") {
 
   // An image of another size within one camera.
   writePngGray(raw.frames[1].left, GrayImage(80, 48, 90).view());
-  CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-size", options); }), "80x48"));
+  const std::string size = inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-size", options); });
+  CHECK(contains(size, raw.frames[1].left.string() + ": 80x48 pixels, but the camera's first image is 64x48"));
   CHECK(!std::filesystem::exists(dir / "out-size" / "mav0" / "cam0" / "data.mp4"));
 }
 

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <sstream>
 #include <system_error>
+#include <utility>
 
 #include <fmt/core.h>
 
@@ -198,14 +199,23 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
       }
       source = [&, camera](const std::function<void(GrayView)>& emit) {
         GrayImage image;
+        std::pair<int, int> first_size;
         for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
           const StereoFrameRef& frame = dataset.frames[i];
+          const std::filesystem::path& file = camera == 0 ? frame.left : frame.right;
           try {
-            readPngGray(camera == 0 ? frame.left : frame.right, image);
+            readPngGray(file, image);
           } catch (const InputError& e) {
             // Fatal, unlike `voca run`'s skip: the video and data.csv would silently lack the frame.
             throw InputError(fmt::format(
                 "{} (frame {} of cam{}); remove the file to leave the frame out with a warning", e.what(), i, camera));
+          }
+          // The encoder would refuse the frame too, but it knows sizes, not files.
+          if (i == 0) {
+            first_size = {image.width(), image.height()};
+          } else if (std::pair{image.width(), image.height()} != first_size) {
+            throw InputError(fmt::format("{}: {}x{} pixels, but the camera's first image is {}x{}", file.string(),
+                                         image.width(), image.height(), first_size.first, first_size.second));
           }
           emit(image.view());
         }
