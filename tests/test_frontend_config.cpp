@@ -225,6 +225,17 @@ TEST_CASE("config: unreadable and malformed files") {
                        InputError);
   { std::ofstream(dir / "empty.json") << ""; }
   CHECK_THROWS_AS(loadConfig(dir / "empty.json"), InputError);
+  // A key twice in one object (JSON would keep the second silently), at the top and inside a section;
+  // the same key in two different objects is fine.
+  { std::ofstream(dir / "twice.json") << R"({"frontend": {"pattern": 24}, "frontend": {"max_iterations": 3}})"; }
+  CHECK_THROWS_WITH_AS(loadConfig(dir / "twice.json"),
+                       doctest::Contains("twice.json: key \"frontend\" appears twice in one object"), InputError);
+  { std::ofstream(dir / "twice_inner.json") << R"({"frontend": {"pattern": 24, "pattern": 52}})"; }
+  CHECK_THROWS_WITH_AS(loadConfig(dir / "twice_inner.json"),
+                       doctest::Contains("twice_inner.json: key \"pattern\" appears twice"), InputError);
+  { std::ofstream(dir / "apart.json") << R"({"frontend": {"max_iterations": 4}, "backend": {"max_iterations": 6}})"; }
+  CHECK(loadConfig(dir / "apart.json").frontend.max_iterations == 4);
+  CHECK(loadConfig(dir / "apart.json").backend.max_iterations == 6);
   { std::ofstream(dir / "bad_value.json") << R"({"frontend": {"grid_size_px": 2}})"; }
   CHECK_THROWS_WITH_AS(
       loadConfig(dir / "bad_value.json"),

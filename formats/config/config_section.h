@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <span>
 #include <string>
 #include <utility>
@@ -26,12 +27,27 @@ namespace voca {
 
 // Reads a whole JSON file. Every way the text can fail (syntax, a number too large for a double,
 // invalid UTF-8) is an InputError "<file>: not valid JSON: ..."; a missing file is "<file>: cannot
-// open the <what>".
+// open the <what>". A key given twice in one object is an InputError too: JSON parsers keep one of
+// the two silently, so a second "frontend" section would replace the first.
 inline nlohmann::json readJsonFile(const std::filesystem::path& file, const std::string& what) {
   std::ifstream in(file);
   if (!in) throw InputError(fmt::format("{}: cannot open the {}", file.string(), what));
+  std::vector<std::set<std::string>> open_objects;  // the keys seen in each object being read
+  const nlohmann::json::parser_callback_t reject_duplicate_keys = [&](int, nlohmann::json::parse_event_t event,
+                                                                      nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) {
+      open_objects.emplace_back();
+    } else if (event == Event::object_end) {
+      open_objects.pop_back();
+    } else if (event == Event::key && !open_objects.back().insert(parsed.get<std::string>()).second) {
+      throw InputError(fmt::format("{}: key \"{}\" appears twice in one object; merge the two", file.string(),
+                                   parsed.get<std::string>()));
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(in);
+    return nlohmann::json::parse(in, reject_duplicate_keys);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("{}: not valid JSON: {}", file.string(), e.what()));
   }
