@@ -488,6 +488,17 @@ TEST_CASE("pipeline e2e: a run that estimates no pose is an error naming the lik
   CHECK(normal.text.find("no pose was estimated") == std::string::npos);
 }
 
+TEST_CASE("pipeline e2e: a run too short to evaluate says so once, naming its ground truth") {
+  test::ScratchDir dir("pipeline-too-short");
+  const test::CommandOutput two = test::runVocaOutput("run " + rendered().video.string() +
+                                                      " --frames 2 --threads 1 -o " + (dir / "traj.txt").string());
+  INFO(two.text);
+  CHECK(two.exit_code == 0);
+  CHECK(two.text.find("warning: cannot evaluate against") != std::string::npos);
+  CHECK(two.text.find("data.csv, not evaluated (see the warning)") != std::string::npos);
+  CHECK(two.text.find("no ground truth with the dataset") == std::string::npos);
+}
+
 TEST_CASE("pipeline e2e: a failure where the tracker lost most points hints at retry_previous_flow, once") {
   // Twelve frames cut out of the fast sequence: the image jumps far beyond the pyramid's reach.
   test::ScratchDir dir("pipeline-jump");

@@ -416,7 +416,6 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
       result.eval = evaluateTrajectory(result.trajectory, *ground_truth, eval_options);
     } catch (const InputError& e) {
       result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", ground_truth_name, e.what()));
-      result.ground_truth.clear();
     }
   }
   return result;
@@ -485,6 +484,8 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
       fmt::print(out, "RTE (6 frames): {:.4f} m RMSE{}\n", r.eval->rte->stats.rmse,
                  r.eval->rte_divergent ? " (divergent)" : "");
     }
+  } else if (!r.ground_truth.empty()) {
+    fmt::print(out, "ground truth: {}, not evaluated (see the warning)\n", r.ground_truth);
   } else {
     fmt::print(out, "no ground truth with the dataset: ATE/RTE not computed\n");
   }

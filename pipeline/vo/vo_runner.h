@@ -82,10 +82,10 @@ struct VoRunResult {
   RunReport pipeline;               // per-stage latency, queues, drops, damaged frames, error
   int frontend_camera_threads = 1;  // as resolved from VoRunOptions::frontend_camera_threads
   std::string source_end;           // live input: why it ended ("no data for 3 s"), empty otherwise
-  std::optional<EvalReport> eval;   // when there is ground truth
-  std::string ground_truth;
-  SourceCounters source;  // frames the live source lost or could not pair
-  int stop_signal = 0;    // the signal that stopped the run early (0: none)
+  std::optional<EvalReport> eval;   // when there is ground truth and the evaluation succeeded
+  std::string ground_truth;         // the file evaluated against (also when the evaluation failed: a warning says why)
+  SourceCounters source;            // frames the live source lost or could not pair
+  int stop_signal = 0;              // the signal that stopped the run early (0: none)
   std::vector<std::string> warnings;
   // Why the run estimated nothing (every frame lost), with a hint at the cause; empty otherwise.
   // Commands report it as an error and exit non-zero: the trajectory holds no estimate.
