@@ -199,6 +199,17 @@ TEST_CASE("voca synth rejects bad options with a clear error") {
     CHECK(result.text.find("at most 1000000 frames") != std::string::npos);
     CHECK(!fs::exists(scratch / "j"));
   }
+  // Cameras of two sizes: refused before rendering, as `voca run` would refuse the result.
+  voca::StereoRig uneven = voca::synth::eurocRig();
+  uneven.cameras[1].width = 640;
+  const fs::path uneven_calib = scratch / "uneven.json";
+  voca::saveBasaltCalibration(uneven, uneven_calib);
+  const voca::test::CommandOutput sizes =
+      voca::test::runVocaOutput("synth --out " + (scratch / "l").string() + " --camera " + uneven_calib.string());
+  INFO(sizes.text);
+  CHECK(sizes.exit_code == 1);
+  CHECK(sizes.text.find("cam0 is 752x480 but cam1 640x480") != std::string::npos);
+  CHECK(!fs::exists(scratch / "l"));
   // Two sources of motion at once is a usage error (exit code 2), not a silent choice.
   CHECK(runVoca("synth --out " + (scratch / "e").string() + " --motion gentle --trajectory gt.txt") == 2 << 8);
   CHECK(runVoca("synth --out " + (scratch / "k").string() + " --no-such-option") == 2 << 8);

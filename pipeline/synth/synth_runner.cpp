@@ -193,6 +193,12 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
 
   const auto start = std::chrono::steady_clock::now();
   const StereoRig rig = loadRig(options.camera);
+  // What `voca run` requires of every input (a frame slot holds both images at one size).
+  if (rig.cameras[0].width != rig.cameras[1].width || rig.cameras[0].height != rig.cameras[1].height) {
+    throw InputError(fmt::format("--camera {}: cam0 is {}x{} but cam1 {}x{}; the VO needs both cameras at one size",
+                                 options.camera, rig.cameras[0].width, rig.cameras[0].height, rig.cameras[1].width,
+                                 rig.cameras[1].height));
+  }
   const Sequence seq = options.trajectory.empty() ? presetSequence(options, rig) : fileSequence(options, rig);
   const int frames = static_cast<int>(seq.t_ns.size());
   if (frames == 0) throw InputError("--seconds: the sequence has no frames at this rate");
