@@ -604,4 +604,14 @@ TEST_CASE("pipeline: the Chrome trace reads back to the run's own latency statis
   CHECK(readTraceReport(dir / "cut.json").completed == 300);
   test::writeText(dir / "bad.json", "{\"not\": \"a trace\"}");
   test::expectError(test::inputErrorOf([&] { readTraceReport(dir / "bad.json"); }), "not a Chrome trace");
+  // A stage index that is negative, huge or fractional is a malformed event, not an index (-1 crashed,
+  // 1e9 tried to allocate a billion stages).
+  for (const char* stage : {"-1", "1000000000", "1.5", "64"}) {
+    CAPTURE(stage);
+    test::writeText(dir / "stage.json",
+                    std::string(R"([{"name":"read","cat":"stage","ph":"X","pid":1,"tid":1,"ts":0,"dur":1,)") +
+                        R"("args":{"frame":0,"stage":)" + stage + R"(,"cpu_us":1}}])");
+    test::expectError(test::inputErrorOf([&] { readTraceReport(dir / "stage.json"); }),
+                      std::string("malformed trace event (stage ") + stage);
+  }
 }

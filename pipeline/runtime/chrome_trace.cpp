@@ -191,6 +191,16 @@ RunReport readTraceReport(const std::filesystem::path& path) {
   }
   RunReport report;
   std::map<std::int64_t, std::int64_t> frame_begin;
+  // A stage index as --trace writes it: a small whole number (a pipeline has a handful of stages).
+  constexpr std::size_t kMaxStages = 64;
+  const auto stageIndex = [&](const nlohmann::json& args) {
+    const nlohmann::json& stage = args.at("stage");
+    if (!stage.is_number_unsigned() || stage.get<std::size_t>() >= kMaxStages) {
+      throw InputError(fmt::format("{}: malformed trace event (stage {}: expected a whole number below {})",
+                                   path.string(), stage.dump(), kMaxStages));
+    }
+    return stage.get<std::size_t>();
+  };
   const auto stageAt = [&](std::size_t k, const std::string& name) -> StageReport& {
     if (report.stages.size() <= k) report.stages.resize(k + 1);
     StageReport& s = report.stages[k];
@@ -204,15 +214,16 @@ RunReport readTraceReport(const std::filesystem::path& path) {
       const std::string cat = e.value("cat", "");
       if (ph == "X" && cat == "stage") {
         const nlohmann::json& args = e.at("args");
-        StageReport& s = stageAt(args.at("stage").get<std::size_t>(), e.at("name").get<std::string>());
+        const std::size_t stage = stageIndex(args);
+        StageReport& s = stageAt(stage, e.at("name").get<std::string>());
         s.thread = e.at("tid").get<int>() - 1;
         s.service.record(toNs(e.at("dur")));
         s.cpu.record(toNs(args.at("cpu_us")));
-        if (args.at("stage").get<std::size_t>() > 0) s.wait.record(toNs(args.at("wait_us")));
-        if (args.at("stage").get<std::size_t>() == 0) ++report.completed;
+        if (stage > 0) s.wait.record(toNs(args.at("wait_us")));
+        if (stage == 0) ++report.completed;
       } else if (ph == "X" && cat == "helper") {
         const nlohmann::json& args = e.at("args");
-        StageReport& s = stageAt(args.at("stage").get<std::size_t>(), "");
+        StageReport& s = stageAt(stageIndex(args), "");
         s.helper_service.record(toNs(e.at("dur")));
         s.helper_cpu.record(toNs(args.at("cpu_us")));
       } else if (ph == "b" && cat == "latency") {
@@ -241,6 +252,10 @@ RunReport readTraceReport(const std::filesystem::path& path) {
         report.wall_s = args.value("wall_s", 0.0);
         std::size_t k = 0;
         for (const nlohmann::json& stage : args.at("stages")) {
+          if (k >= kMaxStages) {
+            throw InputError(
+                fmt::format("{}: malformed trace summary (more than {} stages)", path.string(), kMaxStages));
+          }
           StageReport& s = stageAt(k++, stage.at("name").get<std::string>());
           s.thread = stage.value("thread", s.thread);
           s.core = stage.value("core", -1);
