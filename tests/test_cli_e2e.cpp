@@ -243,3 +243,19 @@ TEST_CASE("voca encode on a folder with a missing and a corrupt image: warning, 
   CHECK(result.text.find("cam0 pass 1/1: frame") < error);
   CHECK(!fs::exists(out));
 }
+
+TEST_CASE("a path the system refuses is an error naming it, not an internal error") {
+  voca::test::ScratchDir dir("cli-fs-error");
+  const fs::path suite = dir / "suite.json";
+  std::ofstream(suite) << R"({"name": "s", "sequences": [{"name": "b", "path": ")" << dir.path().string()
+                       << R"("}], "bitrates": ["raw"], "modes": ["none"]})";
+  const fs::path file = dir / "a-file";
+  std::ofstream(file) << "x";
+  // The output folder would have to be created where a file is.
+  const voca::test::CommandOutput result = runVocaOutput("bench suite " + suite.string() + " -o " + file.string());
+  INFO(result.text);
+  CHECK(result.exit_code == 1);
+  CHECK(result.text.find("voca bench: error: ") != std::string::npos);
+  CHECK(result.text.find(file.string()) != std::string::npos);
+  CHECK(result.text.find("internal error") == std::string::npos);
+}

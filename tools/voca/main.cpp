@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 
 #include <fmt/core.h>
 
@@ -73,6 +74,11 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
       return 1;
     } catch (const voca::RuntimeFailure& e) {
+      fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
+      return 1;
+    } catch (const std::filesystem::filesystem_error& e) {
+      // A path the system refused (a file where a folder belongs, no permission, a full disk): the
+      // user's to fix, and the message names the path.
       fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
       return 1;
     } catch (const std::exception& e) {

@@ -92,8 +92,9 @@ std::string pipelineHelpFooter() {
          "predicted from it up to the next I-picture (they carry the decoder's concealment along). Poses are\n"
          "written and flushed as they are estimated.\n"
          "Exit codes: 0 done; 1 bad input, a stage failed, or no pose was estimated (every frame lost; what\n"
-         "was written stays); 2 bad command-line options; 130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM,\n"
-         "after writing everything estimated so far; a second signal exits at once.";
+         "was written stays); 2 a command line that does not parse (an unknown option, a missing value);\n"
+         "130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM, after writing everything estimated so far; a\n"
+         "second signal exits at once.";
 }
 
 int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
