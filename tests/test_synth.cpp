@@ -279,14 +279,11 @@ TEST_CASE("motion presets stay in the room and produce the advertised image moti
       }
     }
 
+    const Project into_image = [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
+      return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width && uv.y() < cam0.height;
+    };
     const std::vector<SE3d> first(poses.begin(), poses.begin() + 100);
-    const ImageMotionStats flow = measureImageMotion(
-        scene, rays,
-        [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
-          return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width &&
-                 uv.y() < cam0.height;
-        },
-        first, 48);
+    const ImageMotionStats flow = measureImageMotion(scene, rays, into_image, first, 48);
     INFO("median " << flow.median_px << " p90 " << flow.p90_px << " max " << flow.max_px);
     switch (preset) {
       case MotionPreset::kGentle:
@@ -307,13 +304,7 @@ TEST_CASE("motion presets stay in the room and produce the advertised image moti
     // instead of reading as a standstill.
     const SE3d far_away(poses[0].so3(), poses[0].translation() + Eigen::Vector3d(500.0, 0.0, 0.0));
     const std::vector<SE3d> jump = {poses[0], far_away};
-    const ImageMotionStats lost = measureImageMotion(
-        scene, rays,
-        [&cam0](const Eigen::Vector3d& p, Eigen::Vector2d& uv) {
-          return cam0.camera.project(p, uv) && uv.x() >= 0 && uv.y() >= 0 && uv.x() < cam0.width &&
-                 uv.y() < cam0.height;
-        },
-        jump, 48);
+    const ImageMotionStats lost = measureImageMotion(scene, rays, into_image, jump, 48);
     CHECK(lost.samples == 0);
   }
 }
