@@ -83,7 +83,10 @@ struct DecodeStage::Impl {
     }
     Pending& p = at(target);
     settle(p, camera);
-    if (picture.motion.pictureType() == PictureType::kI) references_damaged[c] = false;
+    // An I-picture ends the damage's reach. A decoder that does not report picture types (a hardware
+    // wrapper without the software parse) cannot tell; there only flagged pictures are skipped.
+    const PictureType type = picture.motion.pictureType();
+    if (type == PictureType::kI || type == PictureType::kUnknown) references_damaged[c] = false;
     const bool predicted_from_damaged = references_damaged[c];
     DecodedStereoFrame& frame = p.slot->frame;
     // Hand the decoded buffers over without copying; the decoder keeps the slot's old ones.
