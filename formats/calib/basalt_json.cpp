@@ -1,12 +1,11 @@
 // Basalt's calibration JSON (cereal layout): value0.{T_imu_cam, intrinsics, resolution}.
 
+#include <fmt/core.h>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include <fmt/core.h>
 #include "formats/calib/calibration_io.h"
-
 #include "formats/calib/internal.h"
 #include "voca/core/error.h"
 

@@ -1,5 +1,6 @@
 // Kalibr camchain YAML and EuRoC camN/sensor.yaml (both Kalibr's camera conventions).
 
+#include <fmt/core.h>
 #include <yaml-cpp/yaml.h>
 
 #include <charconv>
@@ -7,9 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include <fmt/core.h>
 #include "formats/calib/calibration_io.h"
-
 #include "formats/calib/internal.h"
 #include "voca/core/error.h"
 
