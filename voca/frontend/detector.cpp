@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace voca {
 
@@ -125,6 +126,16 @@ int excessResponse(const std::uint8_t* centre, const CircleOffsets& offsets, int
   return response;
 }
 
+// How close to the image's edge detect() takes a corner: the configured border, and at least the
+// 3 px the segment test's circle reaches.
+int detectionBorder(int border_px) { return std::max(border_px, 3); }
+
+// Of the grid cell [start, start + grid) along an image side of `size` pixels, the pixels at least
+// `border` from both edges, as [first, end) (empty when first >= end).
+std::pair<int, int> cellInterior(int start, int grid, int size, int border) {
+  return {std::max(start, border), std::min(start + grid, size - border)};
+}
+
 }  // namespace
 
 int cornerResponse(GrayView image, int x, int y, int threshold) {
@@ -163,11 +174,12 @@ int cornerResponse(GrayView image, int x, int y, int threshold) {
 
 int detectionCells(int width, int height, int grid_size_px, int border_px) {
   if (grid_size_px <= 0) return 0;
-  const int border = std::max(border_px, 3);  // as detect(): the segment test's circle needs 3 px
+  const int border = detectionBorder(border_px);
   const auto cellsAlong = [&](int size) {
     int cells = 0;
     for (int start = 0; start < size; start += grid_size_px) {
-      cells += std::max(start, border) < std::min(start + grid_size_px, size - border) ? 1 : 0;
+      const auto [first, end] = cellInterior(start, grid_size_px, size, border);
+      cells += first < end ? 1 : 0;
     }
     return cells;
   };
@@ -217,15 +229,15 @@ int GridDetector::detect(GrayView image, std::span<const Eigen::Vector2f> existi
   const int lowest = thresholds[static_cast<std::size_t>(num_thresholds - 1)];
 
   const CircleOffsets offsets = circleOffsets(image.stride);
-  const int border = std::max(params.border_px, 3);
+  const int border = detectionBorder(params.border_px);
   const float radius2 = params.safe_radius_px * params.safe_radius_px;
   int added = 0;
   for (int cy = 0; cy < cells_y; ++cy) {
     for (int cx = 0; cx < cells_x; ++cx) {
       if (occupied_[static_cast<std::size_t>(cy * cells_x + cx)] != 0) continue;
       if (added >= max_new) return added;
-      const int x0 = std::max(cx * g, border), x1 = std::min((cx + 1) * g, image.width - border);
-      const int y0 = std::max(cy * g, border), y1 = std::min((cy + 1) * g, image.height - border);
+      const auto [x0, x1] = cellInterior(cx * g, g, image.width, border);
+      const auto [y0, y1] = cellInterior(cy * g, g, image.height, border);
       if (x0 >= x1 || y0 >= y1) continue;
       // One pass finds every pixel that is a corner at the lowest threshold, with its arc strength;
       // the halving sequence then only needs the strongest of them.
