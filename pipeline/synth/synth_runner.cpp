@@ -77,6 +77,11 @@ struct Sequence {
 // The longest sequence synth renders (stereo frames): 13.9 h at 20 Hz, about 0.5 TB of PNGs.
 constexpr int kMaxFrames = 1'000'000;
 
+// With --trajectory: the frames --seconds asks for; -1 = the whole file.
+int64_t trajectoryFrameLimit(const SynthOptions& options) {
+  return options.seconds ? static_cast<int64_t>(std::llround(*options.seconds * options.rate_hz)) : -1;
+}
+
 Sequence presetSequence(const SynthOptions& options, const StereoRig& rig) {
   const std::optional<MotionPreset> preset = parseMotionPreset(options.motion);
   if (!preset) {
@@ -117,7 +122,7 @@ Sequence fileSequence(const SynthOptions& options, const StereoRig& rig) {
                                  static_cast<double>(t1 - trajectory.poses.front().t_ns) * 1e-9));
   }
   const double period_ns = 1e9 / options.rate_hz;
-  const int64_t limit = options.seconds ? static_cast<int64_t>(std::llround(*options.seconds * options.rate_hz)) : -1;
+  const int64_t limit = trajectoryFrameLimit(options);
   for (int64_t k = 0;; ++k) {
     if (limit >= 0 && k >= limit) break;
     const int64_t t = t0 + static_cast<int64_t>(std::llround(static_cast<double>(k) * period_ns));
@@ -301,8 +306,7 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   for (const SE3d& T : seq.T_world_body) T_world_cam0.push_back(T * rig.cameras[0].T_body_cam);
   SynthResult result;
   result.frames = frames;
-  if (!options.trajectory.empty() && options.seconds &&
-      static_cast<double>(frames) < std::floor(*options.seconds * options.rate_hz + 1e-9)) {
+  if (!options.trajectory.empty() && frames < trajectoryFrameLimit(options)) {
     result.warnings.push_back(
         fmt::format("--seconds {}: {} from --start {} s holds only {} frames at {} Hz; wrote those", *options.seconds,
                     options.trajectory.string(), options.start_s, frames, options.rate_hz));
