@@ -108,6 +108,9 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   CAPTURE(output);
   CHECK(output.find("6 runs, 0 done before, 6 run now, 3 failed") != std::string::npos);
   CHECK(output.find("[6/6]") != std::string::npos);  // the progress line counts done/total
+  // An external trajectory that is not there is x, and said: a mistyped path reads the same.
+  CHECK(output.find("warning: other on broken at 250k: " + (dir / "missing.txt").string() + " does not exist") !=
+        std::string::npos);
 
   const json ok = readJson(out / "runs" / "room_250k_mv_parallel_of" / "result.json");
   CHECK(ok["status"] == "ok");
@@ -185,6 +188,35 @@ TEST_CASE("voca bench suite: failures recorded as x, resume, emit-jobs, collect,
   REQUIRE_FALSE(room[11].empty());
   CHECK(std::stod(room[11]) == doctest::Approx(std::stod(room[2])).epsilon(1e-6));  // the same trajectory
   CHECK(readCsv(out / "results.csv").size() == 1 + 5 + 2);  // header, 5 runs with results, 2 external
+}
+
+TEST_CASE("voca bench suite: a call whose every run fails exits 1 and names the reason, not the --help pointer") {
+  voca::test::ScratchDir dir("bench-suite-all-failed");
+  const fs::path out = dir / "out";
+  // An option `voca run` does not know: each run ends with a usage error (exit code 2).
+  const json suite = {
+      {"name", "all-failed"},
+      {"sequences", {{{"name", "room"}, {"synth", {"--motion", "gentle", "--seconds", "0.25", "--supersample", "1"}}}}},
+      {"bitrates", {"250k"}},
+      {"modes", {"none", "mv"}},
+      {"run_args", {"--no-such-option"}}};
+  voca::test::writeText(dir / "suite.json", suite.dump(2));
+  std::string output;
+  const int status = runVocaCapture("bench suite " + (dir / "suite.json").string() + " --out " + out.string(), output,
+                                    dir / "log.txt");
+  CAPTURE(output);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  CHECK(output.find("2 runs, 0 done before, 2 run now, 2 failed") != std::string::npos);
+  CHECK(output.find("error: every run of this call failed; the first: room_250k_") != std::string::npos);
+  CHECK(output.find("--no-such-option") != std::string::npos);
+  const json failed = readJson(out / "runs" / "room_250k_none" / "result.json");
+  CHECK(failed["status"] == "failed");
+  const std::string reason = failed["reason"].get<std::string>();
+  CHECK(reason.find("--no-such-option") != std::string::npos);
+  CHECK(reason.find("Run with --help") == std::string::npos);
+  // The tables are still written, every cell x.
+  CHECK(fs::exists(out / "tables" / "250k.md"));
 }
 
 TEST_CASE("voca bench suite with repeats: each cell is the median of runs tracking from later frames") {

@@ -64,15 +64,19 @@ std::int64_t videoBytes(const fs::path& input) {
   return bytes;
 }
 
-// The last non-empty line of a log: usually the error a failed command printed.
+// The last non-empty line of a log: usually the error a failed command printed. A usage error ends
+// with the command-line parser's pointer to --help; the line before it is the reason.
 std::string lastLogLine(const fs::path& log) {
   std::ifstream in(log);
-  std::string line, last;
+  std::string line, last, before_last;
   while (std::getline(in, line)) {
     const std::size_t cr = line.find_last_of('\r');
     if (cr != std::string::npos) line = line.substr(cr + 1);
-    if (line.find_first_not_of(" \t") != std::string::npos) last = line;
+    if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    before_last = std::move(last);
+    last = line;
   }
+  if (last.rfind("Run with --help", 0) == 0 && !before_last.empty()) return before_last;
   return last;
 }
 
@@ -396,6 +400,7 @@ SuiteRunReport runSuite(const Suite& suite, const SuitePlan& plan, const fs::pat
       writeFile(resultFile(run.job.output), result.dump(2) + "\n");
       ++report.ran;
       ++report.failed;
+      if (report.first_failure.empty()) report.first_failure = run.job.id + ": " + result["reason"].get<std::string>();
       continue;
     }
     todo.push_back(&run);
@@ -431,7 +436,10 @@ SuiteRunReport runSuite(const Suite& suite, const SuitePlan& plan, const fs::pat
         ++finished;
         busy_s += seconds;
         const bool ok = result.value("status", "") == "ok";
-        if (!ok) ++report.failed;
+        if (!ok) {
+          ++report.failed;
+          if (report.first_failure.empty()) report.first_failure = run.job.id + ": " + result.value("reason", "");
+        }
         if (!options.progress) return;
         const int done = report.skipped + report.ran;
         const std::size_t left = todo.size() - static_cast<std::size_t>(finished);
@@ -479,6 +487,11 @@ std::vector<fs::path> collectResults(const fs::path& out, const std::string& voc
                                        [&](const SuiteSequence& s) { return s.name == external.sequence; });
     const fs::path dataset = sequence->synth_args.empty() ? sequence->path : out / "sequences" / sequence->name;
     json result = evaluateExternal(external, dataset, sequence->ground_truth, suite.frames);
+    if (!fs::exists(external.trajectory)) {
+      // The paper's x for a system that wrote nothing; said aloud, since a mistyped path reads the same.
+      fmt::print(stderr, "warning: {} on {} at {}: {} does not exist, so its cell is x (failed)\n", external.system,
+                 external.sequence, external.bitrate, external.trajectory.string());
+    }
     results[{external.sequence, external.bitrate, external.system}] = {result};
     rows.push_back(result);
   }

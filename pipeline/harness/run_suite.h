@@ -26,10 +26,11 @@ struct SuiteRunOptions {
 };
 
 struct SuiteRunReport {
-  int total = 0;    // runs in the plan
-  int skipped = 0;  // done by an earlier call
-  int ran = 0;      // run now
-  int failed = 0;   // of those, recorded as failed
+  int total = 0;              // runs in the plan
+  int skipped = 0;            // done by an earlier call
+  int ran = 0;                // run now
+  int failed = 0;             // of those, recorded as failed
+  std::string first_failure;  // "<run id>: <reason>" of the first run recorded as failed now
   int preparation_failures = 0;
   bool stopped = false;
 };

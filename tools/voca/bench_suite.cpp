@@ -64,6 +64,11 @@ int runSuiteCommand(const SuiteOptions& o) {
              report.ran, report.failed, report.stopped ? " (stopped: call again to resume)" : "");
   printWritten(files, out);
   if (report.stopped) return platform::interruptedExitCode(platform::stopSignal());
+  if (report.ran > 0 && report.failed == report.ran) {
+    // Single failures are results (x in the tables); all of them is a broken setup.
+    fmt::print(stderr, "error: every run of this call failed; the first: {}\n", report.first_failure);
+    return 1;
+  }
   return 0;
 }
 
@@ -84,13 +89,14 @@ Runner configureSuiteBench(CLI::App& app) {
       "(raw, 250k, 500k, 1000k, 5000k ...), prior modes, I-frame bridging on/off and configs, plus\n"
       "trajectories of other systems to compare with. Every video is encoded once into <out>/videos;\n"
       "each run is a child `voca run` writing <out>/runs/<id>/{trajectory.txt,stats.json,log.txt,\n"
-      "result.json}. A run that crashes or fails is recorded as x and the suite goes on; a second call\n"
-      "skips what is done. Tables follow the paper's rules: <out>/tables/<bitrate>.{md,csv,tex},\n"
-      "<out>/summary.md, with each prior mode against `none` (also <out>/against_none.csv). With\n"
-      "\"repeats\": N each VOCA-RT cell is the median of N runs tracking from frames 0, s, 2s ...\n"
-      "(s = \"repeat_step_frames\", default 5), since one run's error depends on its luck. Cluster:\n"
-      "--emit-jobs synth, then encode, then run, each | parallel (or a Slurm array), then\n"
-      "`voca bench collect <out>`. Ctrl-C stops after the running runs; call again.");
+      "result.json}. A run that crashes or fails is recorded as x and the suite goes on (exit code 1\n"
+      "when every run of the call failed); a second call skips what is done. Tables follow the paper's\n"
+      "rules: <out>/tables/<bitrate>.{md,csv,tex}, <out>/summary.md, with each prior mode against\n"
+      "`none` (also <out>/against_none.csv). With \"repeats\": N each VOCA-RT cell is the median of N\n"
+      "runs tracking from frames 0, s, 2s ... (s = \"repeat_step_frames\", default 5), since one run's\n"
+      "error depends on its luck. Cluster: --emit-jobs synth, then encode, then run, each | parallel\n"
+      "(or a Slurm array), then `voca bench collect <out>`. Ctrl-C stops after the running runs; call\n"
+      "again.");
   return [o] { return runSuiteCommand(*o); };
 }
 
