@@ -80,7 +80,9 @@ std::optional<ChildExit> pollChild(pid_t pid) {
 
 ForkedRun runForked(const std::function<int()>& work) {
   std::array<int, 2> pipe_ends{};
-  if (::pipe(pipe_ends.data()) != 0)
+  // Close-on-exec: a process another thread starts meanwhile must not hold the write end, or the read
+  // below would wait for that process to end. dup2 clears the flag on the copy's stderr.
+  if (::pipe2(pipe_ends.data(), O_CLOEXEC) != 0)
     throw RuntimeFailure(fmt::format("cannot create a pipe: {}", std::strerror(errno)));
   std::fflush(nullptr);  // else the copy would write this process's buffered output a second time
   const pid_t pid = ::fork();
