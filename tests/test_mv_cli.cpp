@@ -4,6 +4,7 @@
 #include <string>
 
 #include "drivers/decode/demuxer.h"
+#include "drivers/encode/rgb_video_writer.h"
 #include "formats/image/png_io.h"
 #include "tests/test_support.h"
 
@@ -68,4 +69,44 @@ TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4"
   // Bad input: a folder that is not a video dataset, and a camera that does not exist.
   CHECK(runVoca("mv " + raw.string() + " --out " + (dir / "bad1").string()) != 0);
   CHECK(runVoca("mv " + video.string() + " --out " + (dir / "bad2").string() + " --camera 2") != 0);
+}
+
+TEST_CASE("RgbVideoWriter opens its file at once; without a frame it leaves none behind") {
+  voca::test::ScratchDir dir("rgb-writer");
+  const std::string error =
+      voca::test::inputErrorOf([&] { voca::encode::RgbVideoWriter writer(dir / "no-such-folder" / "x.mp4"); });
+  CHECK(error.find("no-such-folder/x.mp4: cannot open for writing") != std::string::npos);
+  {
+    voca::encode::RgbVideoWriter writer(dir / "empty.mp4");
+    CHECK(fs::exists(dir / "empty.mp4"));
+  }
+  CHECK_FALSE(fs::exists(dir / "empty.mp4"));
+}
+
+TEST_CASE("voca track --overlay: the tracks as an mp4; an unwritable path fails before tracking, naming it") {
+  voca::test::ScratchDir dir("track-overlay");
+  const fs::path raw = dir / "raw";
+  const fs::path video = dir / "video";
+  REQUIRE(runVoca("synth --out " + raw.string() + " --seconds 0.3 --motion gentle --supersample 1") == 0);
+  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+
+  const fs::path overlay = dir / "overlay.mp4";
+  const auto ok = voca::test::runVocaOutput("track " + video.string() + " --overlay " + overlay.string());
+  CAPTURE(ok.text);
+  REQUIRE(ok.exit_code == 0);
+  CHECK(ok.text.find("overlay: " + overlay.string()) != std::string::npos);
+  voca::decode::Demuxer demuxer(overlay);
+  CHECK(demuxer.stream().width == 752);
+  voca::decode::Packet packet;
+  int packets = 0;
+  while (demuxer.read(packet)) ++packets;
+  CHECK(packets == 6);
+
+  const fs::path unwritable = dir / "no-such-folder" / "overlay.mp4";
+  const auto bad = voca::test::runVocaOutput("track " + video.string() + " --overlay " + unwritable.string());
+  CAPTURE(bad.text);
+  CHECK(bad.exit_code == 1);
+  CHECK(bad.text.find(unwritable.string() + ": cannot open for writing") != std::string::npos);
+  CHECK(bad.text.find("tracks per frame") == std::string::npos);  // no summary of a run that did not happen
+  CHECK(bad.text.find("overlay: ") == std::string::npos);
 }

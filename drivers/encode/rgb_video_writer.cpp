@@ -1,6 +1,8 @@
 #include "drivers/encode/rgb_video_writer.h"
 
 #include <string>
+#include <system_error>
+#include <utility>
 
 #include "drivers/decode/ffmpeg_util.h"
 #include "voca/core/error.h"
@@ -19,6 +21,7 @@ using detail::avErrorText;
 struct RgbVideoWriter::Impl {
   std::filesystem::path path;
   AVRational fps{30, 1};
+  AVIOContext* file = nullptr;  // opened by the constructor, handed to `format` by open()
   AVFormatContext* format = nullptr;
   AVStream* stream = nullptr;
   std::unique_ptr<AVCodecContext, detail::CodecContextDeleter> codec;
@@ -30,6 +33,11 @@ struct RgbVideoWriter::Impl {
 
   ~Impl() {
     sws_freeContext(sws);
+    if (file != nullptr) {  // no frame came: no empty .mp4 left behind
+      avio_closep(&file);
+      std::error_code ignored;
+      std::filesystem::remove(path, ignored);
+    }
     if (format != nullptr) {
       if (format->pb != nullptr) avio_closep(&format->pb);
       avformat_free_context(format);
@@ -46,6 +54,8 @@ RgbVideoWriter::RgbVideoWriter(const std::filesystem::path& path, int fps_num, i
     : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   impl_->fps = AVRational{fps_num, fps_den};
+  // The file now, so an unwritable path fails before any frame is made for it.
+  impl_->check(avio_open(&impl_->file, path.string().c_str(), AVIO_FLAG_WRITE), "cannot open for writing");
 }
 
 RgbVideoWriter::~RgbVideoWriter() {
@@ -86,7 +96,7 @@ void RgbVideoWriter::Impl::open(int width, int height) {
   if (stream == nullptr) throw RuntimeFailure("out of memory");
   stream->time_base = codec->time_base;
   check(avcodec_parameters_from_context(stream->codecpar, codec.get()), "cannot set stream parameters");
-  check(avio_open(&format->pb, path.string().c_str(), AVIO_FLAG_WRITE), "cannot open for writing");
+  format->pb = std::exchange(file, nullptr);
   check(avformat_write_header(format, nullptr), "cannot write the mp4 header");
   header_written = true;
   frame->format = codec->pix_fmt;

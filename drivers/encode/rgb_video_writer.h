@@ -11,7 +11,8 @@ namespace voca::encode {
 
 class RgbVideoWriter {
  public:
-  // Frames must all have the size of the first one. fps as a rational.
+  // Frames must all have the size of the first one. fps as a rational. Opens the file (InputError when it
+  // cannot be written).
   RgbVideoWriter(const std::filesystem::path& path, int fps_num = 30, int fps_den = 1);
   ~RgbVideoWriter();  // finishes the file if finish() was not called (errors are swallowed there)
   RgbVideoWriter(const RgbVideoWriter&) = delete;
