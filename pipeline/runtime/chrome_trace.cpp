@@ -186,18 +186,26 @@ RunReport readTraceReport(const std::filesystem::path& path) {
     // A run that was killed leaves the array open; the format allows that.
     events = nlohmann::json::parse(text + "\n]", nullptr, false);
   }
+  if (events.is_discarded() && text.rfind("[\n{", 0) == 0) {
+    // Killed in the middle of a write (or the disk filled): every event starts a line with ",\n{", so
+    // the events before the last start are whole.
+    if (const std::size_t last = text.rfind(",\n{"); last != std::string::npos) {
+      text.resize(last);
+      events = nlohmann::json::parse(text + "\n]", nullptr, false);
+    }
+  }
   if (events.is_discarded() || !events.is_array()) {
     throw InputError(fmt::format("{}: not a Chrome trace-event JSON array (as `--trace` writes)", path.string()));
   }
   RunReport report;
   std::map<std::int64_t, std::int64_t> frame_begin;
-  // A stage index as --trace writes it: a small whole number (a pipeline has a handful of stages).
-  constexpr std::size_t kMaxStages = 64;
+  // A stage index as --trace writes it: a whole number below the pipeline's most stages.
+  constexpr auto kStageLimit = static_cast<std::size_t>(kMaxStages);
   const auto stageIndex = [&](const nlohmann::json& args) {
     const nlohmann::json& stage = args.at("stage");
-    if (!stage.is_number_unsigned() || stage.get<std::size_t>() >= kMaxStages) {
+    if (!stage.is_number_unsigned() || stage.get<std::size_t>() >= kStageLimit) {
       throw InputError(fmt::format("{}: malformed trace event (stage {}: expected a whole number below {})",
-                                   path.string(), stage.dump(), kMaxStages));
+                                   path.string(), stage.dump(), kStageLimit));
     }
     return stage.get<std::size_t>();
   };
@@ -252,9 +260,9 @@ RunReport readTraceReport(const std::filesystem::path& path) {
         report.wall_s = args.value("wall_s", 0.0);
         std::size_t k = 0;
         for (const nlohmann::json& stage : args.at("stages")) {
-          if (k >= kMaxStages) {
+          if (k >= kStageLimit) {
             throw InputError(
-                fmt::format("{}: malformed trace summary (more than {} stages)", path.string(), kMaxStages));
+                fmt::format("{}: malformed trace summary (more than {} stages)", path.string(), kStageLimit));
           }
           StageReport& s = stageAt(k++, stage.at("name").get<std::string>());
           s.thread = stage.value("thread", s.thread);

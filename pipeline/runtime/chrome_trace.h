@@ -5,7 +5,8 @@
 // per frame from arrival to the end of the last stage, an instant event per dropped or damaged
 // frame, and a closing summary event. Written as frames complete, one flush per frame, so a stopped
 // run leaves a readable file (the array format tolerates a missing closing bracket).
-// readTraceReport() reads such a file back into the same statistics the run printed.
+// readTraceReport() reads such a file back into the same statistics the run printed (a file cut inside
+// an event, up to that event).
 
 #include <array>
 #include <cstdint>
