@@ -7,6 +7,7 @@
 #include "drivers/encode/rgb_video_writer.h"
 #include "formats/image/png_io.h"
 #include "tests/test_support.h"
+#include "tests/test_video_damage.h"
 
 namespace fs = std::filesystem;
 
@@ -65,6 +66,21 @@ TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4"
   int packets = 0;
   while (demuxer.read(packet)) ++packets;
   CHECK(packets == 8);
+
+  // A damaged picture is drawn as the decoder concealed it and named; --strict stops there instead.
+  voca::test::damagePacket(video / "mav0" / "cam0" / "data.mp4", 3);
+  const auto damaged = voca::test::runVocaOutput("mv " + video.string() + " --out " + (dir / "damaged").string());
+  CAPTURE(damaged.text);
+  CHECK(damaged.exit_code == 0);
+  CHECK(damaged.text.find("warning: frame 3 is damaged") != std::string::npos);
+  CHECK(damaged.text.find("wrote 8 frame(s)") != std::string::npos);
+  CHECK(damaged.text.find("; 1 damaged)") != std::string::npos);
+  CHECK(fs::exists(dir / "damaged" / "mv_000007.png"));
+  const auto strict =
+      voca::test::runVocaOutput("mv " + video.string() + " --out " + (dir / "strict").string() + " --strict");
+  CAPTURE(strict.text);
+  CHECK(strict.exit_code == 1);
+  CHECK(strict.text.find("frame 3") != std::string::npos);
 
   // Bad input: a folder that is not a video dataset, and a camera that does not exist.
   CHECK(runVoca("mv " + raw.string() + " --out " + (dir / "bad1").string()) != 0);

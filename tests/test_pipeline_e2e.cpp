@@ -27,6 +27,7 @@
 #include "formats/trajectory/trajectory_io.h"
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
+#include "tests/test_video_damage.h"
 
 extern char** environ;
 
@@ -90,21 +91,6 @@ void expectSameTrajectory(const std::string& name, pipeline::VoRunOptions option
       CHECK(text == reference);
     }
   }
-}
-
-// Overwrites the slice data of packet `index` of a camera's video with noise, in place.
-void damagePacket(const fs::path& video, int index) {
-  decode::Demuxer demuxer(video);
-  decode::Packet packet;
-  for (int i = 0; i <= index; ++i) REQUIRE(demuxer.read(packet));
-  std::string bytes = fileText(video);
-  const std::string needle(packet.bytes.begin(), packet.bytes.begin() + std::min<std::size_t>(64, packet.bytes.size()));
-  const std::size_t at = bytes.find(needle);
-  REQUIRE(at != std::string::npos);
-  std::mt19937 rng(5);
-  // Past the 4-byte length prefix and the slice header's first bytes: the macroblock data is garbage.
-  for (std::size_t i = at + 12; i < at + packet.bytes.size(); ++i) bytes[i] = static_cast<char>(rng());
-  std::ofstream(video, std::ios::binary | std::ios::trunc) << bytes;
 }
 
 // Copies a video folder (small: two short videos and text files).
@@ -341,7 +327,7 @@ TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --st
   test::ScratchDir dir("pipeline-damaged");
   const fs::path video = dir / "video";
   copyFolder(rendered().video, video);
-  damagePacket(video / "mav0" / "cam0" / "data.mp4", 24);
+  test::damagePacket(video / "mav0" / "cam0" / "data.mp4", 24);
 
   pipeline::VoRunOptions options = quietRun(video, dir / "traj.txt", 0);
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
@@ -377,7 +363,7 @@ TEST_CASE("pipeline e2e: after a damaged picture the stream heals at the next I-
   encoding.settings.two_pass = false;
   encoding.settings.x264_params = "keyint=10:min-keyint=10:scenecut=0:bframes=0:ref=1";
   encode::encodeDataset(rendered().raw, video, encoding);
-  damagePacket(video / "mav0" / "cam1" / "data.mp4", 18);
+  test::damagePacket(video / "mav0" / "cam1" / "data.mp4", 18);
 
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(quietRun(video, dir / "traj.txt", 1));
   REQUIRE_FALSE(result.pipeline.error);

@@ -37,6 +37,7 @@ struct MvOptions {
   std::string decoder = "auto";
   float arrow_scale = 1.0f;
   voca::OutlierParams outliers;
+  bool strict = false;
 };
 
 // Frame range "a:b" (a inclusive, b exclusive, either may be omitted).
@@ -82,6 +83,7 @@ int runMv(const MvOptions& opts) {
   const FrameRange range = parseFrameRange(opts.frames);
   DecoderOptions decoder_options;
   decoder_options.kind = parseDecoderKind(opts.decoder);
+  decoder_options.strict = opts.strict;
 
   std::unique_ptr<VideoReader> reader;
   if (fs::is_directory(opts.input)) {
@@ -109,13 +111,19 @@ int runMv(const MvOptions& opts) {
   DecodedFrame frame;
   frame.reserve(reader->stream().width, reader->stream().height);
   RgbImage canvas(reader->stream().width, reader->stream().height);
-  int written = 0;
+  int written = 0, damaged = 0;
   std::int64_t total_vectors = 0, total_outliers = 0;
   const std::int64_t expected = reader->expectedFrames();
   voca::platform::ProgressLine progress;
   while (reader->next(frame)) {
     if (frame.frame_index < range.first) continue;  // decoded anyway: later P-frames refer to it
     if (frame.frame_index >= range.end) break;
+    if (frame.damaged) {
+      // Drawn all the same: what the decoder concealed is what a damaged stream gives the tracker.
+      ++damaged;
+      progress.message("warning: frame {} is damaged (missing or corrupt data, concealed by the decoder)",
+                       frame.frame_index);
+    }
     const int outliers = frame.motion.flagOutliers(opts.outliers);
     total_vectors += static_cast<std::int64_t>(frame.motion.blocks().size());
     total_outliers += outliers;
@@ -133,9 +141,9 @@ int runMv(const MvOptions& opts) {
   if (video) video->finish();
   progress.end();
   if (written == 0) throw voca::InputError("--frames '" + opts.frames + "': no frame of the video is in this range");
-  fmt::print("{}: wrote {} frame(s) to {} ({} vectors, {} flagged as likely outliers)\n", reader->path().string(),
+  fmt::print("{}: wrote {} frame(s) to {} ({} vectors, {} flagged as likely outliers{})\n", reader->path().string(),
              written, opts.format == "mp4" ? (fs::path(opts.out) / "mv.mp4").string() : opts.out, total_vectors,
-             total_outliers);
+             total_outliers, damaged > 0 ? fmt::format("; {} damaged", damaged) : std::string());
   return 0;
 }
 
@@ -164,10 +172,14 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--outlier-relative", opts->outliers.rel_threshold,
                      "... or by more than this fraction of the median's length, whichever is larger")
           ->capture_default_str();
+      app.add_flag("--strict", opts->strict,
+                   "Stop at the first damaged picture instead of drawing what the decoder concealed");
       app.footer(
           "Gray frame as RGB; blue: block partitions of inter blocks (intra blocks and I-frames have none);\n"
           "green arrows: forward flow of each block (the codec vector negated), starting at the block centre;\n"
-          "red: vectors deviating from the median of their neighbourhood (likely not true motion).");
+          "red: vectors deviating from the median of their neighbourhood (likely not true motion).\n"
+          "A damaged picture (missing or corrupt data) is drawn as the decoder concealed it and named in a\n"
+          "warning; --strict stops there instead.");
       return [opts] { return runMv(*opts); };
     },
 });
