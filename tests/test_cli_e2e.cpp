@@ -259,3 +259,57 @@ TEST_CASE("a path the system refuses is an error naming it, not an internal erro
   CHECK(result.text.find(file.string()) != std::string::npos);
   CHECK(result.text.find("internal error") == std::string::npos);
 }
+
+TEST_CASE("an output that is an input file, in the dataset's data folder, or another output's file is refused first") {
+  voca::test::ScratchDir dir("cli-outputs-apart");
+  const fs::path raw = dir / "raw";
+  const fs::path video = dir / "video";
+  REQUIRE(voca::test::runVoca("synth --out " + raw.string() + " --seconds 0.3 --motion gentle --supersample 1") == 0);
+  REQUIRE(voca::test::runVoca("encode " + raw.string() + " --out " + video.string() +
+                              " --bitrate 500k --single-pass") == 0);
+  const fs::path left_video = video / "mav0" / "cam0" / "data.mp4";
+  const fs::path ground_truth = video / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+  const auto video_size = fs::file_size(left_video);
+  const auto gt_size = fs::file_size(ground_truth);
+  const auto refused = [&](const std::string& args, const std::string& message) {
+    const voca::test::CommandOutput result = runVocaOutput(args);
+    INFO(args);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find(message) != std::string::npos);
+  };
+  // The run's outputs against what it reads: before, these truncated the video or replaced the ground truth.
+  refused("run " + video.string() + " -o " + left_video.string(),
+          "the trajectory file " + left_video.string() + " lies in the dataset's mav0 folder");
+  refused("run " + video.string() + " -o " + ground_truth.string(), "lies in the dataset's mav0 folder");
+  refused("track " + video.string() + " --overlay " + left_video.string(), "the overlay video");
+  refused("run " + video.string() + " -o " + (dir / "t.txt").string() + " --gt " + (dir / "gt.csv").string() +
+              " --stats " + (dir / "gt.csv").string(),
+          "the statistics file " + (dir / "gt.csv").string() + " is the ground truth");
+  // Two outputs, one file (also spelt differently).
+  refused("run " + video.string() + " -o " + (dir / "same.txt").string() + " --stats " +
+              (dir / "x" / ".." / "same.txt").string(),
+          "the trajectory file and the statistics file name the same file");
+  refused("run " + video.string() + " -o \"\"", "--out: an empty path");
+  CHECK(fs::file_size(left_video) == video_size);
+  CHECK(fs::file_size(ground_truth) == gt_size);
+  CHECK_FALSE(fs::exists(dir / "same.txt"));
+  // A trajectory beside the data is fine.
+  CHECK(voca::test::runVoca("run " + video.string() + " -o " + (video / "trajectory.txt").string()) == 0);
+
+  // voca encode: an output folder holding the input (given as its mav0 folder), --decoded-png onto the input.
+  refused("encode " + (raw / "mav0").string() + " --out " + raw.string() + " --single-pass",
+          "the output folder " + raw.string() + " holds the input dataset");
+  refused("encode " + raw.string() + " --out " + (dir / "enc").string() + " --decoded-png " + raw.string(),
+          "--decoded-png " + raw.string() + " is the input dataset");
+  refused("encode " + raw.string() + " --out " + (dir / "enc").string() + " --decoded-png " + (dir / "enc").string(),
+          "is the output folder");
+  CHECK(fs::exists(raw / "mav0" / "cam0" / "data.csv"));
+  CHECK_FALSE(fs::exists(dir / "enc"));
+  // voca synth over a video dataset, voca eval's report over its estimate.
+  refused("synth --out " + video.string() + " --seconds 0.2", "holds a video dataset");
+  CHECK(fs::file_size(ground_truth) == gt_size);
+  refused("eval --gt " + ground_truth.string() + " --est " + (video / "trajectory.txt").string() + " --json " +
+              (video / "trajectory.txt").string(),
+          "--json " + (video / "trajectory.txt").string() + " is --est");
+}

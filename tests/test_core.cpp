@@ -9,8 +9,10 @@
 #include <thread>
 #include <vector>
 
+#include "platform/filesystem/output_paths.h"
 #include "platform/process/child_process.h"
 #include "platform/realtime/clock.h"
+#include "tests/test_support.h"
 #include "voca/core/quantile.h"
 
 TEST_CASE("quantile of an empty sample is NaN, not a plausible number") {
@@ -90,4 +92,26 @@ TEST_CASE("runForked reports the copy's exit code, its stderr and a crash, and t
   });
   CHECK(crash.exit.signal == SIGABRT);
   CHECK(voca::platform::describeExit(crash.exit).find("signal") != std::string::npos);
+}
+
+TEST_CASE("isWithin compares whole path elements of resolved paths; requireOutputsApart names both paths") {
+  CHECK(voca::isWithin("a/b/c.txt", "a/b"));
+  CHECK(voca::isWithin("a/b", "a/b/"));
+  CHECK(voca::isWithin("a/./x/../b", "a/b"));
+  CHECK(voca::isWithin(std::filesystem::current_path() / "a" / "b", "a"));  // absolute against relative
+  CHECK_FALSE(voca::isWithin("ab/c", "a"));                                 // a string prefix is not a parent folder
+  CHECK_FALSE(voca::isWithin("a", "a/b"));
+  const voca::NamedPath inputs[] = {{"the ground truth", "data/gt.csv"}, {"the dataset's mav0 folder", "seq/mav0"}};
+  const voca::NamedPath apart[] = {{"-o", "out/t.txt"}, {"--stats", "out/s.json"}, {"--trace", ""}};
+  CHECK_NOTHROW(voca::requireOutputsApart(apart, inputs));
+  const voca::NamedPath onto_input[] = {{"--stats", "./data/gt.csv"}};
+  CHECK(voca::test::inputErrorOf([&] { voca::requireOutputsApart(onto_input, inputs); }) ==
+        "--stats ./data/gt.csv is the ground truth (data/gt.csv), which this command reads; choose another path");
+  const voca::NamedPath twice[] = {{"-o", "out/t.txt"}, {"--trace", "out/../out/t.txt"}};
+  CHECK(voca::test::inputErrorOf([&] { voca::requireOutputsApart(twice, inputs); }) ==
+        "-o and --trace name the same file out/../out/t.txt; give each its own");
+  CHECK_NOTHROW(voca::requireFoldersApart({"the output folder", "seq/mav0/enc"}, {"the input dataset", "seq"}));
+  CHECK(voca::test::inputErrorOf([&] {
+          voca::requireFoldersApart({"the output folder", "seq"}, {"the input dataset", "seq/mav0"});
+        }) == "the output folder seq holds the input dataset (seq/mav0); choose a folder apart from it");
 }

@@ -16,6 +16,7 @@
 #include "formats/calib/calibration_io.h"
 #include "formats/image/png_io.h"
 #include "formats/trajectory/trajectory_io.h"
+#include "platform/filesystem/output_paths.h"
 #include "voca/core/error.h"
 
 namespace voca::encode {
@@ -150,14 +151,7 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
       throw InputError(fmt::format("camera {} is listed twice", camera));
     }
   }
-  std::error_code same_error;
-  if (fs::exists(out) && fs::equivalent(out, dataset.root, same_error)) {
-    throw InputError(fmt::format("the output folder {} is the input dataset; choose another folder", out.string()));
-  }
-  if (fs::exists(out) && fs::equivalent(out, dataset.root / "mav0", same_error)) {
-    throw InputError(
-        fmt::format("the output folder {} is inside the input dataset; choose another folder", out.string()));
-  }
+  requireFoldersApart({"the output folder", out}, {"the input dataset", dataset.root});
 
   EncoderSettings settings = options.settings;
   if (options.use_dataset_fps) datasetFrameRate(dataset, settings.fps_num, settings.fps_den);

@@ -174,6 +174,14 @@ void renderImage(const Scene& scene, const RayTable& rays, std::span<const SE3d>
 
 SynthResult synthesizeSequence(const SynthOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 1000.0)) throw InputError("--rate: expected 0 < Hz <= 1000");
+  for (const char* camera : {"cam0", "cam1"}) {
+    // A rendering writes images and data.csv beside the videos, which would leave a folder of neither.
+    const fs::path video = options.out / "mav0" / camera / "data.mp4";
+    if (fs::exists(video)) {
+      throw InputError(fmt::format("{} holds a video dataset ({}); voca synth writes images: choose another folder",
+                                   options.out.string(), video.string()));
+    }
+  }
   if (options.seconds && !(*options.seconds > 0.0)) throw InputError("--seconds: expected a positive number");
   // A bound before anything is allocated per frame: poses are kept for the whole sequence.
   if (options.seconds && *options.seconds * options.rate_hz > kMaxFrames) {

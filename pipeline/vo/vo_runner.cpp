@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 
@@ -20,6 +21,7 @@
 #include "pipeline/stages/decode_stage.h"
 #include "pipeline/stages/estimation_stages.h"
 #include "pipeline/stages/source_stage.h"
+#include "platform/filesystem/output_paths.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/realtime/stop_signal.h"
 #include "platform/realtime/thread_control.h"
@@ -175,6 +177,33 @@ RunConfig resolveRunConfig(const std::optional<std::filesystem::path>& config, b
 
 namespace {
 
+// Before anything is written: no output may be a file the run reads or lie in the dataset's data
+// folders (`-o mav0/cam0/data.mp4` truncated the video it was about to decode), and no two outputs
+// may be one file. dataset: nullptr for a stream.
+void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* dataset,
+                                   const std::optional<std::filesystem::path>& calibration) {
+  const std::array<NamedPath, 4> outputs = {NamedPath{"the trajectory file", options.trajectory_file},
+                                            NamedPath{"the statistics file", options.statistics_file},
+                                            NamedPath{"the trace file", options.pipeline.trace_path},
+                                            NamedPath{"the overlay video", options.overlay_file}};
+  std::vector<NamedPath> inputs;
+  if (dataset != nullptr) {
+    const std::filesystem::path& root = dataset->root;
+    if (dataset->layout == DatasetLayout::kKitti) {
+      for (const char* part : {"image_0", "image_1", "times.txt", "calib.txt"}) {
+        inputs.push_back({"the dataset's " + std::string(part), root / part});
+      }
+    } else {
+      inputs.push_back({"the dataset's mav0 folder", root.filename() == "mav0" ? root : root / "mav0"});
+    }
+    if (dataset->ground_truth) inputs.push_back({"the ground truth", *dataset->ground_truth});
+  }
+  if (options.ground_truth) inputs.push_back({"the ground truth", *options.ground_truth});
+  if (calibration) inputs.push_back({"the calibration", *calibration});
+  if (options.config && std::filesystem::exists(*options.config)) inputs.push_back({"the config", *options.config});
+  requireOutputsApart(outputs, inputs);
+}
+
 // `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.
 VoRunResult runOnStream(const VoRunOptions& options) {
   const std::string url = options.input.string();
@@ -183,6 +212,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   }
   if (options.encode_bitrate_bps > 0) throw InputError(fmt::format("{}: --encode applies to raw datasets only", url));
   if (options.first_frame > 0) throw InputError(fmt::format("{}: --start-frame applies to recordings only", url));
+  requireOutputsApartFromInputs(options, nullptr, options.calibration);
   const StereoRig rig = loadCalibration(*options.calibration);
   if (rig.cameras.size() < 2) {
     throw InputError(fmt::format("{}: need a stereo calibration", options.calibration->string()));
@@ -243,6 +273,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   if (options.mode) result.config.frontend.prior_mode = *options.mode;
   if (options.bridge_iframes) result.config.frontend.bridge_iframes = *options.bridge_iframes;
   const std::optional<std::filesystem::path> calibration = options.calibration ? options.calibration : raw.calibration;
+  requireOutputsApartFromInputs(options, &raw, calibration);
   if (!calibration) {
     throw InputError(
         fmt::format("{}: no calibration found beside the dataset; pass one with --calib", options.input.string()));

@@ -12,6 +12,7 @@
 
 #include "drivers/decode/decoded_dataset.h"
 #include "drivers/encode/dataset_encoder.h"
+#include "platform/filesystem/output_paths.h"
 #include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
@@ -81,6 +82,12 @@ int runEncode(const EncodeOptions& cli) {
   parseFps(cli.fps, options);
   options.cameras = parseCameras(cli.cameras);
   if (!cli.calib.empty()) options.calibration = cli.calib;
+  if (!cli.decoded_png.empty()) {
+    // Checked before the long encoding: the decoded frames are written after it.
+    if (options.cameras.size() != 2) throw voca::InputError("--decoded-png needs both cameras (--cameras 0,1)");
+    voca::requireFoldersApart({"--decoded-png", cli.decoded_png}, {"the input dataset", cli.dataset});
+    voca::requireFoldersApart({"--decoded-png", cli.decoded_png}, {"the output folder", cli.out});
+  }
   silenceCodecLogs();
 
   const auto start = std::chrono::steady_clock::now();
@@ -128,7 +135,6 @@ int runEncode(const EncodeOptions& cli) {
   if (report.ground_truth_written) fmt::print("ground truth -> {}\n", report.ground_truth_written->string());
   if (report.calibration_written) fmt::print("calibration  -> {}\n", report.calibration_written->string());
   if (!cli.decoded_png.empty()) {
-    if (options.cameras.size() != 2) throw voca::InputError("--decoded-png needs both cameras (--cameras 0,1)");
     const voca::decode::DecodedDatasetReport decoded =
         voca::decode::writeDecodedEuroc(cli.out, cli.decoded_png, [&](std::int64_t done, std::int64_t total) {
           if (done % 50 == 0 || done == total) progress.update("decoding to PNG: frame {}/{}", done, total);

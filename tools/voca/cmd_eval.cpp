@@ -11,6 +11,7 @@
 #include "formats/calib/calibration_io.h"
 #include "formats/eval/eval_report_json.h"
 #include "formats/trajectory/trajectory_io.h"
+#include "platform/filesystem/output_paths.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
@@ -129,6 +130,13 @@ void printReport(const voca::EvalReport& report, const voca::EvalOptions& option
 }
 
 int runEval(const EvalCommandOptions& cli) {
+  const voca::NamedPath report_file{"--json", cli.json_path};
+  const voca::NamedPath inputs[] = {{"--gt", cli.gt_path},
+                                    {"--est", cli.est_path},
+                                    {"--gt-times", cli.gt_times},
+                                    {"--est-times", cli.est_times},
+                                    {"--calib", cli.calib_path}};
+  voca::requireOutputsApart({&report_file, 1}, inputs);
   LoadedTrajectory gt = loadInput(cli.gt_path, cli.gt_format, cli.gt_times, cli.gt_frame);
   LoadedTrajectory est = loadInput(cli.est_path, cli.est_format, cli.est_times, cli.est_frame);
   matchFrames(est, gt, cli.calib_path);

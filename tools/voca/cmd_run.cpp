@@ -46,6 +46,7 @@ int runRun(const RunOptions& o) {
   options.stream_start_timeout_s = o.stream_wait;
   const auto format = voca::parseTrajectoryFormat(o.format);
   if (!format) throw voca::InputError(fmt::format("--format: expected tum, euroc or kitti, got \"{}\"", o.format));
+  if (o.out.empty()) throw voca::InputError("--out: an empty path; name the trajectory file to write");
   options.trajectory_file = o.out;
   options.trajectory_format = *format;
   voca::cli::applyPipelineOptions(o.pipeline, options);
