@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tests/test_frontend_support.h"
+#include "tests/test_support.h"
 #include "voca/frontend/detector.h"
 #include "voca/frontend/frontend.h"
 #include "voca/frontend/patch.h"
@@ -411,6 +412,18 @@ struct PlaneSequence {
 };
 
 }  // namespace
+
+TEST_CASE("frontend: a capacity of 0 or above 65536 points per camera is refused before anything is allocated") {
+  const StereoRig rig = voca::test::pinholeRig(320, 240, 300.0, 0.1);
+  const FrontendConfig config;
+  for (const int max_points : {0, 65537, 10000000}) {
+    CAPTURE(max_points);
+    const std::string error =
+        voca::test::inputErrorOf([&] { KltFrontend frontend(config, rig, {.max_points = max_points}); });
+    CHECK(error == "frontend capacity: max_points " + std::to_string(max_points) + " must be between 1 and 65536");
+  }
+  CHECK_NOTHROW(KltFrontend(config, rig, {.max_points = 1}));
+}
 
 TEST_CASE("frontend: tracks a translating plane with persistent ids, stereo matches at the true disparity") {
   PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
