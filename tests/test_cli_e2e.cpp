@@ -313,3 +313,20 @@ TEST_CASE("an output that is an input file, in the dataset's data folder, or ano
               (video / "trajectory.txt").string(),
           "--json " + (video / "trajectory.txt").string() + " is --est");
 }
+
+TEST_CASE("pacing and waiting bounds: NaN, infinite and negative values are refused by name") {
+  voca::test::ScratchDir dir("cli-bounds");
+  const std::string run = "run " + dir.path().string() + " -o " + (dir / "t.txt").string();
+  for (const char* speed : {"nan", "-1", "0", "inf"}) {
+    const voca::test::CommandOutput result = runVocaOutput(run + " --realtime --speed " + speed);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("--speed: expected a factor above 0 and at most 1e6") != std::string::npos);
+  }
+  for (const char* wait : {"--stream-wait inf", "--stream-wait nan", "--stream-timeout 1e300"}) {
+    const voca::test::CommandOutput result = runVocaOutput(run + " " + wait);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("expected seconds above 0 and at most 86400") != std::string::npos);
+  }
+}

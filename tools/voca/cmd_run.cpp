@@ -39,8 +39,11 @@ int runRun(const RunOptions& o) {
   if (o.start_frame < 0) throw voca::InputError("--start-frame: expected 0 (the first frame) or a positive index");
   options.first_frame = o.start_frame;
   options.max_points = o.max_points;
-  if (!(o.stream_timeout > 0.0) || !(o.stream_wait > 0.0)) {
-    throw voca::InputError("--stream-timeout and --stream-wait: expected positive seconds");
+  // A day at most: a deadline of inf or 1e300 s overflowed and ended the wait at once.
+  constexpr double kMaxWaitS = 86400.0;
+  if (!(o.stream_timeout > 0.0 && o.stream_timeout <= kMaxWaitS) ||
+      !(o.stream_wait > 0.0 && o.stream_wait <= kMaxWaitS)) {
+    throw voca::InputError("--stream-timeout and --stream-wait: expected seconds above 0 and at most 86400 (a day)");
   }
   options.stream_timeout_s = o.stream_timeout;
   options.stream_start_timeout_s = o.stream_wait;

@@ -68,7 +68,10 @@ void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& option
   }
   options.pipeline.priority = cli.priority;
   options.pipeline.lock_memory = cli.lock_memory;
-  if (cli.speed <= 0.0) throw InputError(fmt::format("--speed: expected a positive factor, got {}", cli.speed));
+  // NaN paced nothing (every comparison false): the run waited forever at frame 0.
+  if (!(cli.speed > 0.0 && cli.speed <= 1e6)) {
+    throw InputError(fmt::format("--speed: expected a factor above 0 and at most 1e6, got {}", cli.speed));
+  }
   options.realtime = cli.realtime;
   options.speed = cli.speed;
   options.strict = cli.strict;
