@@ -294,6 +294,14 @@ TEST_CASE("an output that is an input file, in the dataset's data folder, or ano
   CHECK(fs::file_size(left_video) == video_size);
   CHECK(fs::file_size(ground_truth) == gt_size);
   CHECK_FALSE(fs::exists(dir / "same.txt"));
+  // An output that cannot be written is refused before the run, with the reason (the statistics were
+  // written only after the whole run).
+  refused("run " + video.string() + " -o " + (dir / "t.txt").string() + " --stats " +
+              (dir / "no-such-folder" / "s.json").string(),
+          "cannot write the statistics file " + (dir / "no-such-folder" / "s.json").string() + ": the folder " +
+              (dir / "no-such-folder").string() + " does not exist");
+  refused("run " + video.string() + " -o " + dir.path().string(),
+          "cannot write the trajectory file " + dir.path().string() + ": it is a folder");
   // A trajectory beside the data is fine.
   CHECK(voca::test::runVoca("run " + video.string() + " -o " + (video / "trajectory.txt").string()) == 0);
 

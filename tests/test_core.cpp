@@ -110,6 +110,11 @@ TEST_CASE("isWithin compares whole path elements of resolved paths; requireOutpu
   const voca::NamedPath twice[] = {{"-o", "out/t.txt"}, {"--trace", "out/../out/t.txt"}};
   CHECK(voca::test::inputErrorOf([&] { voca::requireOutputsApart(twice, inputs); }) ==
         "-o and --trace name the same file out/../out/t.txt; give each its own");
+  CHECK_NOTHROW(voca::requireWritableFile({"-o", std::filesystem::temp_directory_path() / "voca-new-file.txt"}));
+  CHECK_FALSE(std::filesystem::exists(std::filesystem::temp_directory_path() / "voca-new-file.txt"));  // not created
+  CHECK(voca::test::inputErrorOf([&] {
+          voca::requireWritableFile({"-o", "no-such-folder/t.txt"});
+        }) == "cannot write -o no-such-folder/t.txt: the folder no-such-folder does not exist");
   CHECK_NOTHROW(voca::requireFoldersApart({"the output folder", "seq/mav0/enc"}, {"the input dataset", "seq"}));
   CHECK(voca::test::inputErrorOf([&] {
           voca::requireFoldersApart({"the output folder", "seq"}, {"the input dataset", "seq/mav0"});

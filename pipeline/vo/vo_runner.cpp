@@ -202,6 +202,8 @@ void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* d
   if (calibration) inputs.push_back({"the calibration", *calibration});
   if (options.config && std::filesystem::exists(*options.config)) inputs.push_back({"the config", *options.config});
   requireOutputsApart(outputs, inputs);
+  // The statistics are written after the run: an unwritable path must not cost the whole run.
+  for (const NamedPath& output : outputs) requireWritableFile(output);
 }
 
 // `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.

@@ -1,6 +1,10 @@
 #include "platform/filesystem/output_paths.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <system_error>
 
 #include <fmt/core.h>
@@ -51,6 +55,24 @@ void requireOutputsApart(std::span<const NamedPath> outputs, std::span<const Nam
       throw InputError(fmt::format("{} and {} name the same file {}; give each its own", outputs[other].what, out.what,
                                    out.path.string()));
     }
+  }
+}
+
+void requireWritableFile(const NamedPath& output) {
+  if (output.path.empty()) return;
+  const fs::path& path = output.path;
+  std::error_code error;
+  if (fs::is_directory(path, error)) {
+    throw InputError(fmt::format("cannot write {} {}: it is a folder", output.what, path.string()));
+  }
+  const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (!fs::is_directory(folder, error)) {
+    throw InputError(
+        fmt::format("cannot write {} {}: the folder {} does not exist", output.what, path.string(), folder.string()));
+  }
+  const bool exists = fs::exists(path, error);
+  if (::access((exists ? path : folder).c_str(), W_OK) != 0) {
+    throw InputError(fmt::format("cannot write {} {}: {}", output.what, path.string(), std::strerror(errno)));
   }
 }
 

@@ -23,6 +23,11 @@ bool isWithin(const std::filesystem::path& inner, const std::filesystem::path& o
 // two outputs are one file. Empty paths are skipped.
 void requireOutputsApart(std::span<const NamedPath> outputs, std::span<const NamedPath> inputs);
 
+// Throws InputError, naming the path and the reason, when the file cannot be written where it is: its
+// folder is missing or not writable, or the path is a folder. Creates nothing, so a command can check
+// every output before its work instead of failing after it. An empty path is skipped.
+void requireWritableFile(const NamedPath& output);
+
 // Throws InputError naming both when the output folder is the input folder or holds it: a command
 // writing a dataset layout (out/mav0/..., out/calib.json) there could overwrite the input's files.
 void requireFoldersApart(const NamedPath& output, const NamedPath& input);
