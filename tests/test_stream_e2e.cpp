@@ -25,6 +25,8 @@
 
 #include "drivers/encode/live_encoder.h"
 #include "drivers/network/frame_stamp.h"
+#include "drivers/network/stream_url.h"
+#include "drivers/network/ts_writer.h"
 #include "drivers/source/dataset_source.h"
 #include "drivers/source/network_source.h"
 #include "formats/calib/calibration_io.h"
@@ -415,4 +417,31 @@ TEST_CASE("voca run on a stream with lost datagrams finishes, counts the loss an
   }
   CHECK(rows == frames);
   CHECK(last_t >= static_cast<double>(dataset.frames[static_cast<std::size_t>(n - 10)].t_ns) * 1e-9 - 1e-6);
+}
+
+TEST_CASE("stream URLs: a port outside 1..65535 or none is refused by name; a listening sender stops on request") {
+  // libavformat wrapped 99999 to 34463 and waited out its timeout for a URL without a port.
+  for (const char* url : {"udp://127.0.0.1:99999", "udp://127.0.0.1:0", "tcp://[::1]:50x0?listen=1"}) {
+    CAPTURE(url);
+    CHECK(test::inputErrorOf([&] { network::StereoTsWriter writer(url, 64, 64); })
+              .find("is not a number from 1 to "
+                    "65535") != std::string::npos);
+  }
+  CHECK(test::inputErrorOf([&] { NetworkStereoSource source("udp://127.0.0.1", {}); }) ==
+        "udp://127.0.0.1: no port; give one, as in udp://127.0.0.1:5000");
+  CHECK(test::inputErrorOf([&] {
+          NetworkStereoSource source("udp://127.0.0.1:65536", {});
+        }).find("port 65536 is not a number") != std::string::npos);
+  network::requireStreamPort("udp://[::1]:5000?pkt_size=1316");  // IPv6 host, options after the port
+  network::requireStreamPort("/tmp/stream.ts");                  // a file: no port to check
+
+  // tcp://...?listen=1 blocks in accept() until a receiver connects; a stop request ends the wait.
+  const auto start = std::chrono::steady_clock::now();
+  const std::string error = test::inputErrorOf([&] {
+    network::StereoTsWriter writer("tcp://127.0.0.1:" + std::to_string(freeUdpPort()) + "?listen=1", 64, 64, [&] {
+      return std::chrono::steady_clock::now() - start > std::chrono::milliseconds(200);
+    });
+  });
+  CHECK(error.find("stopped while opening tcp://127.0.0.1:") == 0);
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(10));
 }

@@ -1,6 +1,7 @@
 #include "drivers/network/ts_writer.h"
 
 #include <array>
+#include <utility>
 
 #include <fmt/core.h>
 
@@ -10,6 +11,7 @@ extern "C" {
 #include <libavutil/error.h>
 }
 
+#include "drivers/network/stream_url.h"
 #include "voca/core/error.h"
 
 namespace voca::network {
@@ -28,6 +30,7 @@ constexpr AVRational kTsClock{1, 90000};
 
 struct StereoTsWriter::Impl {
   std::string url;
+  std::function<bool()> stop_requested;
   AVFormatContext* format = nullptr;
   AVPacket* packet = nullptr;
   std::array<AVStream*, 2> streams{};
@@ -46,8 +49,11 @@ struct StereoTsWriter::Impl {
   }
 };
 
-StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height) : impl_(std::make_unique<Impl>()) {
+StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height, std::function<bool()> stop_requested)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->stop_requested = std::move(stop_requested);
   Impl& w = *impl_;
+  requireStreamPort(url);
   w.url = url;
   if (url.rfind("udp://", 0) == 0 && url.find("pkt_size=") == std::string::npos) {
     w.url += url.find('?') == std::string::npos ? "?pkt_size=1316" : "&pkt_size=1316";
@@ -77,8 +83,15 @@ StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height) : 
   }
   // Hand every packet to the network at once.
   w.format->flags |= AVFMT_FLAG_FLUSH_PACKETS;
-  if (const int r = avio_open(&w.format->pb, w.url.c_str(), AVIO_FLAG_WRITE); r < 0) {
+  // libavformat polls this while it blocks (a listening tcp:// waits in accept()).
+  const AVIOInterruptCB interrupt{[](void* opaque) {
+                                    const auto& stop = *static_cast<const std::function<bool()>*>(opaque);
+                                    return stop && stop() ? 1 : 0;
+                                  },
+                                  &w.stop_requested};
+  if (const int r = avio_open2(&w.format->pb, w.url.c_str(), AVIO_FLAG_WRITE, &interrupt, nullptr); r < 0) {
     w.close();
+    if (w.stop_requested && w.stop_requested()) throw InputError(fmt::format("stopped while opening {}", url));
     throw InputError(fmt::format("cannot open {} for sending: {}", url, avError(r)));
   }
   AVDictionary* options = nullptr;

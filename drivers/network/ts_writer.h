@@ -13,6 +13,7 @@
 // it (90 kHz from the first frame).
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -23,7 +24,8 @@ class StereoTsWriter {
  public:
   // Opens the output. For udp:// URLs without pkt_size, datagrams carry 7 TS packets (1316 bytes,
   // below any Ethernet MTU). Throws InputError for a bad URL, RuntimeFailure when libavformat fails.
-  StereoTsWriter(const std::string& url, int width, int height);
+  // stop_requested ends a blocking open (tcp://...?listen=1 waits for the receiver) with InputError.
+  StereoTsWriter(const std::string& url, int width, int height, std::function<bool()> stop_requested = {});
   ~StereoTsWriter();
   StereoTsWriter(const StereoTsWriter&) = delete;
   StereoTsWriter& operator=(const StereoTsWriter&) = delete;

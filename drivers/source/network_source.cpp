@@ -14,6 +14,7 @@ extern "C" {
 }
 
 #include "drivers/network/frame_stamp.h"
+#include "drivers/network/stream_url.h"
 #include "voca/core/error.h"
 
 namespace voca {
@@ -101,6 +102,7 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   s.options = options;
   s.interrupted = &interrupted_;
   if (!isStreamUrl(url)) throw InputError(fmt::format("'{}' is not a stream URL (e.g. udp://127.0.0.1:5000)", url));
+  network::requireStreamPort(url);
   if (!(options.timeout_s > 0.0) || !(options.start_timeout_s > 0.0)) {
     throw InputError("network timeouts must be positive");
   }

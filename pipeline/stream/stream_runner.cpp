@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -51,7 +52,15 @@ StreamResult runStream(const StreamOptions& options) {
   result.encoder_description = choice.description;
   std::fprintf(stderr, "%s\n", choice.description.c_str());
 
-  network::StereoTsWriter writer(options.url, encoders[0].width(), encoders[0].height());
+  std::optional<network::StereoTsWriter> opened;
+  try {
+    opened.emplace(options.url, encoders[0].width(), encoders[0].height(), stop_requested);
+  } catch (const InputError&) {
+    if (!stop_requested()) throw;
+    result.stop_signal = platform::stopSignal();  // Ctrl-C while a tcp:// listener waits: a clean stop
+    return result;
+  }
+  network::StereoTsWriter& writer = *opened;
   if (options.progress) {
     std::fprintf(stderr, "streaming %s to %s at %.4g Hz x %.3g\n", info.description.c_str(), options.url.c_str(), rate,
                  options.speed);
