@@ -115,6 +115,9 @@ TEST_CASE("isWithin compares whole path elements of resolved paths; requireOutpu
   CHECK(voca::test::inputErrorOf([&] {
           voca::requireWritableFile({"-o", "no-such-folder/t.txt"});
         }) == "cannot write -o no-such-folder/t.txt: the folder no-such-folder does not exist");
+  CHECK(voca::test::inputErrorOf([&] { voca::requireNotDevice("/dev/zero", "trace file"); }) ==
+        "trace file /dev/zero is a device, not a file");
+  CHECK_NOTHROW(voca::requireNotDevice("/proc/self/status", "trace file"));
   CHECK_NOTHROW(voca::requireFoldersApart({"the output folder", "seq/mav0/enc"}, {"the input dataset", "seq"}));
   CHECK(voca::test::inputErrorOf([&] {
           voca::requireFoldersApart({"the output folder", "seq"}, {"the input dataset", "seq/mav0"});

@@ -43,6 +43,9 @@ TEST_CASE("malformed trajectory files name the file and line") {
   };
 
   contains(loadError(dir, "short.txt", "0 1 2 3 0 0 0 1\n1 1 2 3 0 0 1\n"), "short.txt:2");
+  // A device is refused before reading: /dev/zero has no line end, so its one line grew without bound.
+  CHECK(voca::test::inputErrorOf([] { voca::loadTrajectory("/dev/zero"); }) ==
+        "trajectory file /dev/zero is a device, not a file");
   contains(loadError(dir, "short.txt", "0 1 2 3 0 0 0 1\n1 1 2 3 0 0 1\n"), "found 7");
   contains(loadError(dir, "nan.txt", "# c\n0 1 2 nan 0 0 0 1\n"), "nan.txt:2");
   contains(loadError(dir, "word.txt", "0 1 2 x3 0 0 0 1\n"), "tz 'x3'");

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "formats/trajectory/trajectory_writer.h"
+#include "platform/filesystem/output_paths.h"
 #include "voca/core/error.h"
 
 namespace voca {
@@ -34,6 +35,7 @@ std::string_view trim(std::string_view s) {
 
 // Data rows of a text file; blank lines and '#' comments are skipped.
 std::vector<Row> readRows(const Path& path) {
+  requireNotDevice(path, "trajectory file");
   std::ifstream in(path);
   if (!in) throw InputError(fmt::format("cannot open trajectory file {}", path.string()));
   std::vector<Row> rows;

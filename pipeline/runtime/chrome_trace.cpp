@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "platform/filesystem/output_paths.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {
@@ -176,6 +177,7 @@ void ChromeTraceWriter::close(const RunReport& report) {
 }
 
 RunReport readTraceReport(const std::filesystem::path& path) {
+  requireNotDevice(path, "trace file");
   std::ifstream in(path);
   if (!in) throw InputError(fmt::format("{}: cannot open the trace file", path.string()));
   std::stringstream buffer;

@@ -76,6 +76,13 @@ void requireWritableFile(const NamedPath& output) {
   }
 }
 
+void requireNotDevice(const fs::path& input, const std::string& what) {
+  std::error_code error;
+  if (fs::is_character_file(input, error) || fs::is_block_file(input, error)) {
+    throw InputError(fmt::format("{} {} is a device, not a file", what, input.string()));
+  }
+}
+
 void requireFoldersApart(const NamedPath& output, const NamedPath& input) {
   if (output.path.empty() || input.path.empty()) return;
   // A folder inside the input is left alone: the layout written there (out/mav0/...) is new files.
