@@ -445,3 +445,39 @@ TEST_CASE("stream URLs: a port outside 1..65535 or none is refused by name; a li
   CHECK(error.find("stopped while opening tcp://127.0.0.1:") == 0);
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(10));
 }
+
+TEST_CASE("a receiver with max_frames ends after that many stereo frames, saying so") {
+  const fs::path raw = rendered().raw;
+  const int port = freeUdpPort();
+  const std::string url = "udp://127.0.0.1:" + std::to_string(port);
+  std::int64_t frames = 0;
+  std::string end_reason, receive_error;
+  std::thread receiver([&] {
+    try {
+      NetworkSourceOptions network;
+      network.start_timeout_s = 20.0;
+      network.timeout_s = 1.0;
+      network.max_frames = 5;
+      NetworkStereoSource source(url, network);
+      EncodedStereoPacket packet;
+      while (source.next(packet)) ++frames;
+      end_reason = source.endReason();
+    } catch (const std::exception& e) {
+      receive_error = e.what();
+    }
+  });
+  const Joined join_receiver(receiver);
+  REQUIRE(waitUntilBound(port, 10.0));
+  pipeline::StreamOptions send;
+  send.input = raw;
+  send.url = url;
+  send.encoder = x264Settings();
+  send.progress = false;
+  send.max_frames = 20;
+  send.stop_requested = [] { return false; };
+  pipeline::runStream(send);
+  receiver.join();
+  REQUIRE(receive_error == "");
+  CHECK(frames == 5);
+  CHECK(end_reason == "5 frames received (--frames)");
+}

@@ -202,6 +202,10 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
       end_reason_ = "interrupted";
       return false;
     }
+    if (s.options.max_frames > 0 && s.pairs_out >= s.options.max_frames) {
+      end_reason_ = fmt::format("{} frames received (--frames)", s.options.max_frames);
+      return false;
+    }
     // Pair the oldest waiting frames: equal stamps go out together, an older one has lost its partner.
     while (!s.pending[0].empty() && !s.pending[1].empty()) {
       Pending& left = s.pending[0].front();

@@ -26,6 +26,7 @@ struct NetworkSourceOptions {
   double timeout_s = 3.0;         // no data for this long once started = the sender has stopped
   // Polled while waiting (e.g. SIGINT): true ends the wait like interrupt() does.
   std::function<bool()> stop_requested;
+  std::int64_t max_frames = 0;  // end after this many stereo frames (0: when the stream does)
 };
 
 // True for input names libavformat opens as a network stream (udp://, tcp://, rtp://, srt://, ...).

@@ -226,6 +226,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   NetworkSourceOptions network;
   network.start_timeout_s = options.stream_start_timeout_s;
   network.timeout_s = options.stream_timeout_s;
+  network.max_frames = options.max_frames;
   network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
                                                            : std::function<bool()>(platform::stopRequested);
   if (options.progress) {
