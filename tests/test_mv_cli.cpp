@@ -122,7 +122,8 @@ TEST_CASE("voca track --overlay: the tracks as an mp4; an unwritable path fails 
   const auto bad = voca::test::runVocaOutput("track " + video.string() + " --overlay " + unwritable.string());
   CAPTURE(bad.text);
   CHECK(bad.exit_code == 1);
-  CHECK(bad.text.find(unwritable.string() + ": cannot open for writing") != std::string::npos);
+  CHECK(bad.text.find("cannot write the overlay video " + unwritable.string() + ": the folder " +
+                      (dir / "no-such-folder").string() + " does not exist") != std::string::npos);
   CHECK(bad.text.find("tracks per frame") == std::string::npos);  // no summary of a run that did not happen
   CHECK(bad.text.find("overlay: ") == std::string::npos);
 }

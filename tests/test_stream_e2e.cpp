@@ -481,3 +481,26 @@ TEST_CASE("a receiver with max_frames ends after that many stereo frames, saying
   CHECK(frames == 5);
   CHECK(end_reason == "5 frames received (--frames)");
 }
+
+TEST_CASE("a run stopped while waiting for its stream writes its statistics and no trajectory") {
+  const test::ScratchDir dir("stream-stopped-waiting");
+  const Dataset dataset = openDataset(rendered().raw);
+  REQUIRE(dataset.calibration);
+  pipeline::VoRunOptions options = quietOptions();
+  options.input = "udp://127.0.0.1:" + std::to_string(freeUdpPort());
+  options.calibration = *dataset.calibration;
+  options.trajectory_file = dir / "trajectory.txt";
+  options.statistics_file = dir / "stats.json";
+  const auto start = std::chrono::steady_clock::now();
+  options.pipeline.stop_requested = [&] {
+    return std::chrono::steady_clock::now() - start > std::chrono::milliseconds(300);
+  };
+  const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+  CHECK(result.frames == 0);
+  CHECK(result.description.find("stopped while waiting for the stream") != std::string::npos);
+  CHECK_FALSE(fs::exists(options.trajectory_file));
+  std::ifstream in(options.statistics_file);
+  REQUIRE(in.good());
+  const nlohmann::json stats = nlohmann::json::parse(in);
+  CHECK(stats["frames"] == 0);
+}

@@ -240,6 +240,9 @@ VoRunResult runOnStream(const VoRunOptions& options) {
     VoRunResult stopped;  // Ctrl-C while waiting for the stream: a clean stop, nothing estimated
     stopped.description = fmt::format("{} (stopped while waiting for the stream)", url);
     stopped.stop_signal = platform::stopSignal();
+    stopped.config = config;
+    stopped.config_name = resolved.name;
+    if (!options.statistics_file.empty()) writeStatisticsJson(stopped, options.statistics_file);
     return stopped;
   }
   NetworkStereoSource& source = *opened;
@@ -297,6 +300,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
                          stop_requested)) {
       result.stop_signal = platform::stopSignal();
       result.description = fmt::format("{} (stopped while encoding)", options.input.string());
+      if (!options.statistics_file.empty()) writeStatisticsJson(result, options.statistics_file);
       return result;
     }
     dataset = openDataset(temp->path());

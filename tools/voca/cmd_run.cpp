@@ -56,7 +56,11 @@ int runRun(const RunOptions& o) {
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
   voca::pipeline::printRunSummary(result, stdout);
-  fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
+  if (std::filesystem::exists(o.out)) {
+    fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
+  } else {
+    fmt::print("trajectory: none written (stopped before the first frame)\n");
+  }
   return voca::cli::reportRunEnd(result, o.pipeline, "run");
 }
 

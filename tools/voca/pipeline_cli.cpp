@@ -103,8 +103,11 @@ std::string pipelineHelpFooter() {
 int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
   for (const std::string& warning : result.warnings) fmt::print(stderr, "warning: {}\n", warning);
   if (cli.profile) pipeline::printLatencyReport(result.pipeline, stdout);
-  if (!cli.trace.empty()) fmt::print("trace: {} (open in https://ui.perfetto.dev)\n", cli.trace);
-  if (!cli.stats.empty()) fmt::print("statistics: {}\n", cli.stats);
+  // Named only when written: a run stopped before its first frame has no trace.
+  if (!cli.trace.empty() && std::filesystem::exists(cli.trace)) {
+    fmt::print("trace: {} (open in https://ui.perfetto.dev)\n", cli.trace);
+  }
+  if (!cli.stats.empty() && std::filesystem::exists(cli.stats)) fmt::print("statistics: {}\n", cli.stats);
   if (result.pipeline.error) {
     const pipeline::StageError& e = *result.pipeline.error;
     fmt::print(stderr, "voca {}: error: {} stage failed{}: {}\n", command, e.stage,
