@@ -548,7 +548,7 @@ TEST_CASE("pipeline e2e: a source that fails or ends early leaves a clean result
   }
 }
 
-TEST_CASE("pipeline e2e: SIGINT and SIGTERM stop voca run cleanly; a second signal exits at once") {
+TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a second signal exits at once") {
   test::ScratchDir dir("pipeline-signals");
   const fs::path tmp = dir / "tmp";
   fs::create_directories(tmp);
@@ -556,7 +556,7 @@ TEST_CASE("pipeline e2e: SIGINT and SIGTERM stop voca run cleanly; a second sign
     int signal;
     int expected_exit;
   };
-  for (const Case c : {Case{SIGINT, 130}, Case{SIGTERM, 143}}) {
+  for (const Case c : {Case{SIGINT, 130}, Case{SIGTERM, 143}, Case{SIGHUP, 129}}) {
     INFO("signal " << c.signal);
     const fs::path trajectory = dir / ("traj_" + std::to_string(c.signal) + ".txt");
     const fs::path log = dir / ("log_" + std::to_string(c.signal) + ".txt");

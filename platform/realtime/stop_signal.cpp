@@ -28,6 +28,8 @@ void installStopHandlers() {
   action.sa_flags = 0;  // no SA_RESTART: a blocking read returns EINTR and the stop is seen sooner
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  // The terminal or ssh session went away: stop the same clean way, so what was estimated is kept.
+  sigaction(SIGHUP, &action, nullptr);
 }
 
 bool stopRequested() { return g_stop.load(std::memory_order_relaxed); }

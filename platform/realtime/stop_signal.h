@@ -1,10 +1,10 @@
 #pragma once
-// SIGINT/SIGTERM as a flag: the handler only records the signal (async-signal-safe); shutdown
+// SIGINT/SIGTERM/SIGHUP as a flag: the handler only records the signal (async-signal-safe); shutdown
 // happens in ordinary code that polls stopRequested(). A second signal exits at once.
 
 namespace voca::platform {
 
-// Installs the handlers for SIGINT and SIGTERM (idempotent). The first signal sets the flag; the
+// Installs the handlers for SIGINT, SIGTERM and SIGHUP (idempotent). The first signal sets the flag; the
 // second ends the process immediately with 128 + signal number, for a user whose clean shutdown
 // takes too long.
 void installStopHandlers();

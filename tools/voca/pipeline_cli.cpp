@@ -96,8 +96,8 @@ std::string pipelineHelpFooter() {
          "written and flushed as they are estimated.\n"
          "Exit codes: 0 done; 1 bad input, a stage failed, or no pose was estimated (every frame lost; what\n"
          "was written stays); 2 a command line that does not parse (an unknown option, a missing value);\n"
-         "130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM, after writing everything estimated so far; a\n"
-         "second signal exits at once.";
+         "130 stopped by SIGINT (Ctrl-C), 143 by SIGTERM, 129 by SIGHUP (the terminal closed), after writing\n"
+         "everything estimated so far; a second signal exits at once.";
 }
 
 int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
