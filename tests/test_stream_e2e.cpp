@@ -200,6 +200,17 @@ std::vector<std::uint8_t> withoutDelimiter(const std::vector<std::uint8_t>& byte
   return bytes;
 }
 
+// `voca stream`'s options for sending a rendered dataset to url, quietly.
+pipeline::StreamOptions senderOptions(const fs::path& raw, const std::string& url) {
+  pipeline::StreamOptions send;
+  send.input = raw;
+  send.url = url;
+  send.encoder = x264Settings();
+  send.progress = false;
+  send.stop_requested = [] { return false; };
+  return send;
+}
+
 pipeline::VoRunOptions quietOptions() {
   pipeline::VoRunOptions options;
   options.progress = false;
@@ -242,12 +253,7 @@ TEST_CASE("a stream over loopback arrives bit-identical and the live VO matches 
   const Joined join_receiver(receiver);
   REQUIRE(waitUntilBound(port, 10.0));
 
-  pipeline::StreamOptions send;
-  send.input = raw;
-  send.url = url;
-  send.encoder = x264Settings();
-  send.progress = false;
-  send.stop_requested = [] { return false; };
+  const pipeline::StreamOptions send = senderOptions(raw, url);
   const auto start = std::chrono::steady_clock::now();
   const pipeline::StreamResult sent = pipeline::runStream(send);
   const double send_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -468,13 +474,8 @@ TEST_CASE("a receiver with max_frames ends after that many stereo frames, saying
   });
   const Joined join_receiver(receiver);
   REQUIRE(waitUntilBound(port, 10.0));
-  pipeline::StreamOptions send;
-  send.input = raw;
-  send.url = url;
-  send.encoder = x264Settings();
-  send.progress = false;
+  pipeline::StreamOptions send = senderOptions(raw, url);
   send.max_frames = 20;
-  send.stop_requested = [] { return false; };
   pipeline::runStream(send);
   receiver.join();
   REQUIRE(receive_error == "");
