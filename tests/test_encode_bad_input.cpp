@@ -1,6 +1,8 @@
 // Encoder and `voca encode` logic on bad input: clear InputErrors, no crash, no half-written files.
 
 #include <fstream>
+#include <iterator>
+#include <map>
 
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
@@ -233,4 +235,59 @@ TEST_CASE("a failed dataset encoding removes what it created and only that; its 
   CHECK(report.num_frames == 3);
   CHECK(fs::exists(user / "mav0" / "cam1" / "data.mp4"));
   CHECK(fs::exists(user / "notes.txt"));
+}
+
+TEST_CASE("a re-encoding that fails or is stopped leaves the previous encoding as it was") {
+  namespace fs = std::filesystem;
+  test::ScratchDir dir("encode-replace");
+  DatasetEncodeOptions options;
+  options.settings = test::testSettings();
+  options.settings.two_pass = false;
+  {
+    EurocWriter writer(dir / "raw");
+    for (std::int64_t t = 1; t <= 6; ++t) {
+      GrayImage image(64, 48, static_cast<std::uint8_t>(40 + 20 * t));
+      const GrayView views[2] = {image.view(), image.view()};
+      writer.addFrame(t * 50000000LL, views);
+    }
+    writer.finish();
+  }
+  const fs::path out = dir / "out";
+  REQUIRE(!encodeDataset(dir / "raw", out, options).stopped);
+  // Every file of the encoding, with its bytes.
+  const auto snapshot = [&] {
+    std::map<std::string, std::string> files;
+    for (const auto& entry : fs::recursive_directory_iterator(out)) {
+      if (!entry.is_regular_file()) continue;
+      std::ifstream in(entry.path(), std::ios::binary);
+      files[fs::relative(entry.path(), out).string()] =
+          std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    return files;
+  };
+  const auto before = snapshot();
+  REQUIRE(before.count("mav0/cam0/data.mp4") == 1);
+  REQUIRE(before.count("mav0/cam1/data.csv") == 1);
+
+  SUBCASE("stopped half way through the second camera") {
+    options.settings.bitrate_bps *= 2;  // another encoding, so overwritten files would differ
+    int frames_seen = 0;
+    options.stop_requested = [&] { return ++frames_seen > 9; };
+    const DatasetEncodeReport report = encodeDataset(dir / "raw", out, options);
+    CHECK(report.stopped);
+    CHECK(report.cameras.empty());
+    CHECK(frames_seen == 10);
+  }
+  SUBCASE("failing at cam1's fourth image") {
+    options.settings.bitrate_bps *= 2;
+    std::ofstream(openDataset(dir / "raw").frames[3].right, std::ios::binary | std::ios::trunc) << "not a png";
+    CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", out, options); }), "of cam1"));
+  }
+  // The same files with the same bytes, and no temporary file beside them.
+  CHECK(snapshot() == before);
+
+  // A stopped first encoding leaves no folder.
+  options.stop_requested = [] { return true; };
+  CHECK(encodeDataset(dir / "raw", dir / "fresh", options).stopped);
+  CHECK(!fs::exists(dir / "fresh"));
 }

@@ -62,9 +62,14 @@ void createFolder(const fs::path& folder) {
   }
 }
 
+// Thrown out of the per-frame progress when options.stop_requested says so; encodeDataset turns it
+// into report.stopped after the outputs were cleaned up.
+struct EncodingStopped {};
+
 // What one encoding adds to the output folder, taken away again when it fails: a failed run leaves
-// neither an empty folder nor one camera's video without the other's. What was there before stays,
-// except files of the names the run writes, which it overwrites anyway.
+// neither an empty folder nor one camera's video without the other's. Files are written under
+// temporary names and renamed into place by commit(), so until then what was there before, a
+// previous encoding included, stays as it was.
 class CreatedOutputs {
  public:
   CreatedOutputs() = default;
@@ -88,13 +93,24 @@ class CreatedOutputs {
     if (!outermost.empty()) created_.push_back(outermost);
     createFolder(folder);
   }
-  // A file the run is about to write.
-  void file(const fs::path& file) { created_.push_back(file); }
-  // The run succeeded: keep everything.
-  void keep() { created_.clear(); }
+  // The name to write `final_path` under until commit(): data.mp4 -> data.partial.mp4, beside it
+  // (one file system, so the rename cannot copy) and with its extension (muxers go by it).
+  fs::path staged(const fs::path& final_path) {
+    fs::path staged_path = final_path;
+    staged_path.replace_filename(final_path.stem().string() + ".partial" + final_path.extension().string());
+    created_.push_back(staged_path);
+    staged_.emplace_back(staged_path, final_path);
+    return staged_path;
+  }
+  // The run succeeded: the staged files replace their final names, and everything is kept.
+  void commit() {
+    for (const auto& [staged_path, final_path] : staged_) fs::rename(staged_path, final_path);
+    created_.clear();
+  }
 
  private:
   std::vector<fs::path> created_;
+  std::vector<std::pair<fs::path, fs::path>> staged_;  // (temporary name, final name)
 };
 
 }  // namespace
@@ -171,121 +187,133 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
     rig = loadCalibration(*dataset.calibration);
   }
 
-  CreatedOutputs created;
-  const fs::path mav0 = out / "mav0";
-  for (int camera : options.cameras) {
-    const fs::path cam_dir = mav0 / fmt::format("cam{}", camera);
-    created.folder(cam_dir);
-    CameraEncodeReport cam_report;
-    cam_report.camera = camera;
-    cam_report.video = cam_dir / "data.mp4";
+  try {
+    CreatedOutputs created;
+    const fs::path mav0 = out / "mav0";
+    for (int camera : options.cameras) {
+      const fs::path cam_dir = mav0 / fmt::format("cam{}", camera);
+      created.folder(cam_dir);
+      CameraEncodeReport cam_report;
+      cam_report.camera = camera;
+      cam_report.video = cam_dir / "data.mp4";
 
-    FrameSource source;
-    if (dataset.layout == DatasetLayout::kVocaVideo) {
-      const fs::path video = camera == 0 ? dataset.video_left : dataset.video_right;
-      cam_report.input_bytes = fileSize(video);
-      source = [&, video](const std::function<void(GrayView)>& emit) {
-        decodeLuma(dataset, video, report.num_frames, emit);
-      };
-    } else {
-      for (const StereoFrameRef& frame : dataset.frames) {
-        cam_report.input_bytes += fileSize(camera == 0 ? frame.left : frame.right);
-      }
-      source = [&, camera](const std::function<void(GrayView)>& emit) {
-        GrayImage image;
-        std::pair<int, int> first_size;
-        for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
-          const StereoFrameRef& frame = dataset.frames[i];
-          const std::filesystem::path& file = camera == 0 ? frame.left : frame.right;
-          try {
-            readPngGray(file, image);
-          } catch (const InputError& e) {
-            // Fatal, unlike `voca run`'s skip: the video and data.csv would silently lack the frame.
-            throw InputError(fmt::format(
-                "{} (frame {} of cam{}); remove the file to leave the frame out with a warning", e.what(), i, camera));
-          }
-          // The encoder would refuse the frame too, but it knows sizes, not files.
-          if (i == 0) {
-            first_size = {image.width(), image.height()};
-          } else if (std::pair{image.width(), image.height()} != first_size) {
-            throw InputError(fmt::format("{}: {}x{} pixels, but the camera's first image is {}x{}", file.string(),
-                                         image.width(), image.height(), first_size.first, first_size.second));
-          }
-          emit(image.view());
+      FrameSource source;
+      if (dataset.layout == DatasetLayout::kVocaVideo) {
+        const fs::path video = camera == 0 ? dataset.video_left : dataset.video_right;
+        cam_report.input_bytes = fileSize(video);
+        source = [&, video](const std::function<void(GrayView)>& emit) {
+          decodeLuma(dataset, video, report.num_frames, emit);
+        };
+      } else {
+        for (const StereoFrameRef& frame : dataset.frames) {
+          cam_report.input_bytes += fileSize(camera == 0 ? frame.left : frame.right);
         }
-      };
-    }
-    std::int64_t raw_bytes = 0;
-    const FrameSource counted = [&](const std::function<void(GrayView)>& emit) {
-      raw_bytes = 0;
-      source([&](GrayView image) {
-        raw_bytes += static_cast<std::int64_t>(image.width) * image.height;
-        emit(image);
-      });
-    };
-    created.file(cam_report.video);
-    cam_report.result =
-        encodeVideoFile(cam_report.video, settings, counted, [&](int pass, int num_passes, int frame_index) {
-          if (progress) progress(camera, pass, num_passes, frame_index, report.num_frames);
-        });
-
-    // The frames of the video, in order, with their original timestamps.
-    const fs::path csv_path = cam_dir / "data.csv";
-    created.file(csv_path);
-    std::ofstream csv(csv_path);
-    csv << "#timestamp [ns],filename\n";
-    for (const StereoFrameRef& frame : dataset.frames) csv << frame.t_ns << ',' << frame.t_ns << ".png\n";
-    csv.close();
-    if (!csv) throw InputError(fmt::format("cannot write {}", csv_path.string()));
-
-    report.input_bytes += cam_report.input_bytes;
-    report.output_bytes += cam_report.result.file_bytes;
-    report.raw_bytes += raw_bytes;
-    report.cameras.push_back(std::move(cam_report));
-  }
-
-  if (dataset.ground_truth) {
-    const fs::path gt_dir = mav0 / "state_groundtruth_estimate0";
-    created.folder(gt_dir);
-    const fs::path gt_out = gt_dir / "data.csv";
-    created.file(gt_out);
-    if (dataset.layout == DatasetLayout::kKitti) {
-      // KITTI poses have no timestamps of their own: pair them with times.txt. With a KITTI
-      // calibration the body frame is cam0, so the camera pose is the body pose.
-      const Trajectory poses =
-          loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
-      saveTrajectory(poses, gt_out, TrajectoryFormat::kEuroc);
-    } else {
-      std::error_code error;
-      fs::copy_file(*dataset.ground_truth, gt_out, fs::copy_options::overwrite_existing, error);
-      if (error)
-        throw InputError(
-            fmt::format("cannot copy {} to {}: {}", dataset.ground_truth->string(), gt_out.string(), error.message()));
-    }
-    report.ground_truth_written = gt_out;
-  }
-
-  if (rig) {
-    // Every size is coded as it is (odd ones included), so the calibration carries over unchanged.
-    for (const CameraEncodeReport& cam : report.cameras) {
-      if (cam.camera >= static_cast<int>(rig->cameras.size())) continue;
-      const CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
-      if (calib.width != cam.result.width || calib.height != cam.result.height) {
-        addWarning(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}", cam.camera,
-                               calib.width, calib.height, cam.result.width, cam.result.height));
+        source = [&, camera](const std::function<void(GrayView)>& emit) {
+          GrayImage image;
+          std::pair<int, int> first_size;
+          for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
+            const StereoFrameRef& frame = dataset.frames[i];
+            const std::filesystem::path& file = camera == 0 ? frame.left : frame.right;
+            try {
+              readPngGray(file, image);
+            } catch (const InputError& e) {
+              // Fatal, unlike `voca run`'s skip: the video and data.csv would silently lack the frame.
+              throw InputError(
+                  fmt::format("{} (frame {} of cam{}); remove the file to leave the frame out with a warning", e.what(),
+                              i, camera));
+            }
+            // The encoder would refuse the frame too, but it knows sizes, not files.
+            if (i == 0) {
+              first_size = {image.width(), image.height()};
+            } else if (std::pair{image.width(), image.height()} != first_size) {
+              throw InputError(fmt::format("{}: {}x{} pixels, but the camera's first image is {}x{}", file.string(),
+                                           image.width(), image.height(), first_size.first, first_size.second));
+            }
+            emit(image.view());
+          }
+        };
       }
+      std::int64_t raw_bytes = 0;
+      const FrameSource counted = [&](const std::function<void(GrayView)>& emit) {
+        raw_bytes = 0;
+        source([&](GrayView image) {
+          raw_bytes += static_cast<std::int64_t>(image.width) * image.height;
+          emit(image);
+        });
+      };
+      cam_report.result = encodeVideoFile(created.staged(cam_report.video), settings, counted,
+                                          [&](int pass, int num_passes, int frame_index) {
+                                            if (options.stop_requested && options.stop_requested())
+                                              throw EncodingStopped{};
+                                            if (progress)
+                                              progress(camera, pass, num_passes, frame_index, report.num_frames);
+                                          });
+
+      // The frames of the video, in order, with their original timestamps.
+      const fs::path csv_path = cam_dir / "data.csv";
+      const fs::path csv_staged = created.staged(csv_path);
+      std::ofstream csv(csv_staged);
+      csv << "#timestamp [ns],filename\n";
+      for (const StereoFrameRef& frame : dataset.frames) csv << frame.t_ns << ',' << frame.t_ns << ".png\n";
+      csv.close();
+      if (!csv) throw InputError(fmt::format("cannot write {}", csv_path.string()));
+
+      report.input_bytes += cam_report.input_bytes;
+      report.output_bytes += cam_report.result.file_bytes;
+      report.raw_bytes += raw_bytes;
+      report.cameras.push_back(std::move(cam_report));
     }
-    const fs::path calib_out = out / "calib.json";
-    created.file(calib_out);
-    saveBasaltCalibration(*rig, calib_out);
-    report.calibration_written = calib_out;
-  } else {
-    addWarning("no calibration found with the dataset and none given (--calib): no calib.json written");
+
+    if (dataset.ground_truth) {
+      const fs::path gt_dir = mav0 / "state_groundtruth_estimate0";
+      created.folder(gt_dir);
+      const fs::path gt_out = gt_dir / "data.csv";
+      const fs::path gt_staged = created.staged(gt_out);
+      if (dataset.layout == DatasetLayout::kKitti) {
+        // KITTI poses have no timestamps of their own: pair them with times.txt. With a KITTI
+        // calibration the body frame is cam0, so the camera pose is the body pose.
+        const Trajectory poses =
+            loadTrajectory(*dataset.ground_truth, TrajectoryFormat::kKitti, dataset.root / "times.txt");
+        saveTrajectory(poses, gt_staged, TrajectoryFormat::kEuroc);
+      } else {
+        std::error_code error;
+        fs::copy_file(*dataset.ground_truth, gt_staged, fs::copy_options::overwrite_existing, error);
+        if (error)
+          throw InputError(fmt::format("cannot copy {} to {}: {}", dataset.ground_truth->string(), gt_out.string(),
+                                       error.message()));
+      }
+      report.ground_truth_written = gt_out;
+    }
+
+    if (rig) {
+      // Every size is coded as it is (odd ones included), so the calibration carries over unchanged.
+      for (const CameraEncodeReport& cam : report.cameras) {
+        if (cam.camera >= static_cast<int>(rig->cameras.size())) continue;
+        const CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(cam.camera)];
+        if (calib.width != cam.result.width || calib.height != cam.result.height) {
+          addWarning(fmt::format("the calibration of cam{} is for {}x{} images but the images are {}x{}", cam.camera,
+                                 calib.width, calib.height, cam.result.width, cam.result.height));
+        }
+      }
+      const fs::path calib_out = out / "calib.json";
+      saveBasaltCalibration(*rig, created.staged(calib_out));
+      report.calibration_written = calib_out;
+    } else {
+      addWarning("no calibration found with the dataset and none given (--calib): no calib.json written");
+    }
+    if (options.cameras.size() < 2) {
+      addWarning("only one camera encoded: the folder is not a stereo VOCA video dataset");
+    }
+    created.commit();
+  } catch (const EncodingStopped&) {
+    // Everything this run wrote is gone (CreatedOutputs); what was there before is untouched.
+    DatasetEncodeReport stopped;
+    stopped.input_layout = report.input_layout;
+    stopped.num_frames = report.num_frames;
+    stopped.warnings = std::move(report.warnings);
+    stopped.stopped = true;
+    return stopped;
   }
-  if (options.cameras.size() < 2) {
-    addWarning("only one camera encoded: the folder is not a stereo VOCA video dataset");
-  }
-  created.keep();
   return report;
 }
 

@@ -20,6 +20,9 @@ struct DatasetEncodeOptions {
   bool use_dataset_fps = false;                      // encode at the dataset's own rate (median frame interval)
   std::vector<int> cameras = {0, 1};                 // 0 = left, 1 = right
   std::optional<std::filesystem::path> calibration;  // overrides the one found with the dataset
+  // Polled once per encoded frame; true ends the encoding as a failure would (what it wrote is
+  // removed, the previous output stays) and encodeDataset returns with `stopped` set.
+  std::function<bool()> stop_requested;
 };
 
 // One encoded camera.
@@ -42,6 +45,7 @@ struct DatasetEncodeReport {
   std::optional<std::filesystem::path> calibration_written;
   std::optional<std::filesystem::path> ground_truth_written;
   std::vector<std::string> warnings;
+  bool stopped = false;  // options.stop_requested ended the encoding: nothing was written
 };
 
 // Called per frame: camera, pass (1-based), number of passes, frame index, number of frames.
@@ -62,7 +66,9 @@ void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den);
 // image size. Throws InputError for an unknown or missing dataset, bad options, an output folder
 // that cannot be written or that is the input itself, and an image that cannot be read (naming it:
 // the video must not silently lack a frame). A failed encoding removes what it created: the output
-// folder if it did not exist, else the folders and files it added.
+// folder if it did not exist, else the folders and files it added. Every file is written under a
+// temporary name beside its final one (`data.partial.mp4`) and renamed into place only when the
+// whole encoding succeeded, so a failed or stopped re-encoding leaves the previous output intact.
 DatasetEncodeReport encodeDataset(const std::filesystem::path& input, const std::filesystem::path& out,
                                   const DatasetEncodeOptions& options, const DatasetEncodeProgress& progress = {},
                                   const DatasetEncodeWarning& warn = {});

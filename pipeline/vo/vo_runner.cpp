@@ -33,9 +33,6 @@ namespace voca::pipeline {
 
 namespace {
 
-// Thrown out of the encoder's progress callback when a stop is requested during --encode.
-struct EncodeInterrupted {};
-
 // The looser end of the stereo round trip (squared px) that the starved-right-camera hint suggests;
 // a config already at or above it gets no hint.
 constexpr double kHintedStereoRoundTripDist2 = 0.5;
@@ -152,20 +149,17 @@ bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::
   encode::DatasetEncodeOptions encode_options;
   encode_options.settings.bitrate_bps = bitrate_bps;
   encode_options.calibration = calibration;
+  encode_options.stop_requested = stop_requested;
   encode::silenceCodecLogs();
   // Ended by its destructor, also when an exception leaves: the caller's message starts a line.
   platform::ProgressLine line;
-  try {
-    encode::encodeDataset(input, out, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
-      if (stop_requested && stop_requested()) throw EncodeInterrupted{};
-      if (progress && (frame % 50 == 0 || frame + 1 == n)) {
-        line.update("encoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
-      }
-    });
-  } catch (const EncodeInterrupted&) {
-    return false;
-  }
-  return true;
+  const encode::DatasetEncodeReport report =
+      encode::encodeDataset(input, out, encode_options, [&](int camera, int pass, int passes, int frame, int n) {
+        if (progress && (frame % 50 == 0 || frame + 1 == n)) {
+          line.update("encoding camera {} pass {}/{}: frame {}/{}", camera, pass, passes, frame + 1, n);
+        }
+      });
+  return !report.stopped;
 }
 
 RunConfig resolveRunConfig(const std::optional<std::filesystem::path>& config, bool kitti_input) {

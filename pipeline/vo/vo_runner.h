@@ -93,8 +93,8 @@ struct VoRunResult {
 };
 
 // Encodes a raw dataset the way the paper did (two-pass libx264 at bitrate_bps, its x264 options) into
-// a VOCA video folder at out, printing progress on stderr when asked. Returns false, leaving out
-// incomplete, when stop_requested() turns true first.
+// a VOCA video folder at out, printing progress on stderr when asked. Returns false, having written
+// nothing, when stop_requested() turns true first.
 bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
                      const std::optional<std::filesystem::path>& calibration, bool progress,
                      const std::function<bool()>& stop_requested);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "drivers/decode/decoded_dataset.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "platform/filesystem/output_paths.h"
+#include "platform/realtime/stop_signal.h"
 #include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
@@ -69,6 +71,9 @@ void parseFps(const std::string& text, voca::encode::DatasetEncodeOptions& optio
   options.settings.fps_den = slash == std::string::npos ? 1 : parsePositive(text.substr(slash + 1));
 }
 
+// Thrown out of the --decoded-png progress when a signal asks to stop.
+struct DecodingStopped {};
+
 std::string megabytes(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
 
 int runEncode(const EncodeOptions& cli) {
@@ -89,6 +94,10 @@ int runEncode(const EncodeOptions& cli) {
     voca::requireFoldersApart({"--decoded-png", cli.decoded_png}, {"the output folder", cli.out});
   }
   silenceCodecLogs();
+  // A signal ends the encoding the clean way: the files of this run are removed and a previous
+  // encoding in the same folder stays as it was (a second signal still exits at once).
+  voca::platform::installStopHandlers();
+  options.stop_requested = voca::platform::stopRequested;
 
   const auto start = std::chrono::steady_clock::now();
   int last_percent = -1;
@@ -103,6 +112,13 @@ int runEncode(const EncodeOptions& cli) {
         if (frame + 1 == frames) progress.end();
       },
       [&](const std::string& warning) { progress.message("warning: {}", warning); });
+  if (report.stopped) {
+    progress.end();
+    const bool existed = std::filesystem::exists(std::filesystem::path(cli.out) / "mav0");
+    fmt::print(stderr, "voca encode: stopped by a signal before the encoding finished; nothing was written{}\n",
+               existed ? fmt::format(" ({} holds what it held before)", cli.out) : "");
+    return voca::platform::interruptedExitCode(voca::platform::stopSignal());
+  }
   fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
              report.num_frames);
   fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {}/{} fps, {})\n", cli.out, cli.codec,
@@ -135,11 +151,21 @@ int runEncode(const EncodeOptions& cli) {
   if (report.ground_truth_written) fmt::print("ground truth -> {}\n", report.ground_truth_written->string());
   if (report.calibration_written) fmt::print("calibration  -> {}\n", report.calibration_written->string());
   if (!cli.decoded_png.empty()) {
-    const voca::decode::DecodedDatasetReport decoded =
-        voca::decode::writeDecodedEuroc(cli.out, cli.decoded_png, [&](std::int64_t done, std::int64_t total) {
-          if (done % 50 == 0 || done == total) progress.update("decoding to PNG: frame {}/{}", done, total);
-          if (done == total) progress.end();
-        });
+    voca::decode::DecodedDatasetReport decoded;
+    try {
+      decoded = voca::decode::writeDecodedEuroc(cli.out, cli.decoded_png, [&](std::int64_t done, std::int64_t total) {
+        if (voca::platform::stopRequested()) throw DecodingStopped{};
+        if (done % 50 == 0 || done == total) progress.update("decoding to PNG: frame {}/{}", done, total);
+        if (done == total) progress.end();
+      });
+    } catch (const DecodingStopped&) {
+      progress.end();
+      fmt::print(stderr,
+                 "voca encode: stopped by a signal while writing --decoded-png: the videos in {} are complete, "
+                 "the PNG folder {} is not\n",
+                 cli.out, cli.decoded_png);
+      return voca::platform::interruptedExitCode(voca::platform::stopSignal());
+    }
     fmt::print("decoded    {} frames ({}x{}) as a EuRoC folder -> {}{}\n", decoded.frames, decoded.width,
                decoded.height, cli.decoded_png,
                decoded.calibration_copied ? " (with calib.json and ground truth)" : "");
@@ -163,7 +189,10 @@ const bool registered = voca::cli::registerCommand(
                       "Input dataset folder (EuRoC/TUM-VI root or mav0, KITTI sequence, "
                       "or a VOCA video folder)")
            ->required();
-       app.add_option("--out,-o", options->out, "Output folder (created; existing videos are overwritten)")->required();
+       app.add_option("--out,-o", options->out,
+                      "Output folder (created; the videos, ground truth and calib.json of an earlier encoding there "
+                      "are replaced once this one succeeds)")
+           ->required();
        app.add_option("--bitrate,-b", options->bitrate, "Target bitrate per camera: 500k, 1M, 1000000")
            ->capture_default_str();
        app.add_option("--fps", options->fps,
