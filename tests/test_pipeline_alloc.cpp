@@ -265,7 +265,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
     DepthHintChannel hints;
     FrontendStage frontend(config.frontend, rig, {.max_points = 300}, &hints, true);
     BackendStage backend(config.backend, rig, &hints);
-    TrajectorySink trajectory(dir / "traj.txt", TrajectoryFormat::kTum, kFrames);
+    TrajectorySink trajectory(dir / "traj.txt", TrajectoryFormat::kTum, kFrames, rig.cameras[0].T_body_cam);
     StatisticsSink statistics(kFrames, 1, 2, 3);
     SinkStage write({&trajectory, &statistics});
     CountingSource counted_read(read);

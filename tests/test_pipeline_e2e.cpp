@@ -602,6 +602,48 @@ TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a sec
   CHECK(WEXITSTATUS(status) == 130);
 }
 
+TEST_CASE("pipeline e2e: --format kitti writes the left camera's poses, which voca eval reads as such") {
+  test::ScratchDir dir("pipeline-kitti-format");
+  const std::string run = "run " + rendered().video.string() + " --threads 1 --mode none";
+  const fs::path tum = dir / "traj.tum", kitti = dir / "traj.kitti";
+  REQUIRE(test::runVoca(run + " -o " + tum.string()) == 0);
+  REQUIRE(test::runVoca(run + " --format kitti -o " + kitti.string()) == 0);
+  const Trajectory body = loadTrajectory(tum, TrajectoryFormat::kTum);
+  const Trajectory cam0 = loadTrajectory(kitti, TrajectoryFormat::kKitti);
+  REQUIRE(body.poses.size() == cam0.poses.size());
+  REQUIRE(body.poses.size() > 30);
+  // The rendered rig's body is EuRoC's IMU, half a turn and a few centimetres from cam0.
+  const SE3d T_body_cam0 = loadCalibration(rendered().video / "calib.json").cameras[0].T_body_cam;
+  REQUIRE(T_body_cam0.translation().norm() > 0.01);
+  for (std::size_t i = 0; i < body.poses.size(); ++i) {
+    const SE3d expected = body.poses[i].T_world_body * T_body_cam0;
+    CHECK((cam0.poses[i].T_world_body.translation() - expected.translation()).norm() < 1e-6);
+    CHECK((cam0.poses[i].T_world_body.so3().inverse() * expected.so3()).log().norm() < 1e-6);
+  }
+
+  // Evaluated as a KITTI file with the run's times and the calibration, it gives the TUM file's errors.
+  const fs::path times = dir / "times.txt";
+  {
+    std::ofstream out(times);
+    out.precision(17);
+    for (const TimedPose& pose : body.poses) out << static_cast<double>(pose.t_ns) * 1e-9 << '\n';
+  }
+  const fs::path gt = rendered().video / "mav0" / "state_groundtruth_estimate0" / "data.csv";
+  const auto ateOf = [&](const std::string& args) {
+    const test::CommandOutput eval = test::runVocaOutput("eval --gt " + gt.string() + " " + args);
+    INFO(eval.text);
+    REQUIRE(eval.exit_code == 0);
+    const std::size_t row = eval.text.find("ATE (se3 aligned)");
+    REQUIRE(row != std::string::npos);
+    return std::stod(eval.text.substr(row + std::string("ATE (se3 aligned)").size()));
+  };
+  const double from_tum = ateOf("--est " + tum.string());
+  const double from_kitti = ateOf("--est " + kitti.string() + " --est-times " + times.string() + " --calib " +
+                                  (rendered().video / "calib.json").string());
+  CHECK(from_tum > 0.0);
+  CHECK(from_kitti == doctest::Approx(from_tum).epsilon(1e-3));
+}
+
 TEST_CASE("pipeline e2e: a signal stops voca encode cleanly and leaves an earlier encoding as it was") {
   test::ScratchDir dir("encode-signal");
   const fs::path out = dir / "out";

@@ -15,8 +15,11 @@ namespace voca::pipeline {
 class TrajectorySink final : public FrameSink {
  public:
   // file: nullopt writes no file. reserve_poses: poses kept in memory without reallocating (the
-  // expected frame count; 0 keeps none).
-  TrajectorySink(const std::optional<std::filesystem::path>& file, TrajectoryFormat format, std::size_t reserve_poses);
+  // expected frame count; 0 keeps none). KITTI rows are the left camera's poses (the benchmark's
+  // convention, and what `voca eval` reads a KITTI file as), so that format's file gets
+  // T_world_body * T_body_cam0; the other formats and the kept trajectory are body poses.
+  TrajectorySink(const std::optional<std::filesystem::path>& file, TrajectoryFormat format, std::size_t reserve_poses,
+                 const SE3d& T_body_cam0);
   void consume(const FrameSlot& slot) override;
   void finish() override;
 
@@ -25,6 +28,7 @@ class TrajectorySink final : public FrameSink {
  private:
   std::unique_ptr<TrajectoryWriter> writer_;
   Trajectory trajectory_;
+  std::optional<SE3d> T_body_file_;  // the frame of the file's poses when it is not the body (KITTI: cam0)
   bool keep_;
 };
 

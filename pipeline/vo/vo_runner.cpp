@@ -395,7 +395,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   if (options.estimate) {
     trajectory = std::make_unique<TrajectorySink>(
         options.trajectory_file.empty() ? std::nullopt : std::optional<std::filesystem::path>(options.trajectory_file),
-        options.trajectory_format, options.keep_trajectory ? capacity : 0);
+        options.trajectory_format, options.keep_trajectory ? capacity : 0, rig.cameras[0].T_body_cam);
     sinks.push_back(trajectory.get());
   }
   StatisticsSink statistics(capacity, decode_position, frontend_position, backend_position);

@@ -87,7 +87,10 @@ const bool registered = voca::cli::registerCommand({
                      "Raw datasets: encode at this bitrate (e.g. 500k) to a temporary VOCA folder first");
       app.add_option("--out,-o", o->out, "Trajectory file to write (one row per frame, flushed as estimated)")
           ->required();
-      app.add_option("--format", o->format, "Trajectory format: tum, euroc or kitti (3x4 rows, no timestamps)")
+      app.add_option(
+             "--format", o->format,
+             "Trajectory format: tum, euroc (body poses) or kitti (3x4 rows of the left camera's pose, as the KITTI "
+             "benchmark has them; no timestamps)")
           ->capture_default_str();
       app.add_option("--gt", o->gt,
                      "Ground truth for ATE/RTE (TUM/EuRoC/KITTI; default: the dataset's own, when it has one)");
