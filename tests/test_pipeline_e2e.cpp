@@ -26,6 +26,7 @@
 #include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"
 #include "formats/trajectory/trajectory_io.h"
+#include "pipeline/stages/source_stage.h"
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
 #include "tests/test_video_damage.h"
@@ -600,6 +601,29 @@ TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a sec
   REQUIRE(waitpid(pid, &status, 0) == pid);
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 130);
+}
+
+TEST_CASE("pipeline e2e: live-rate replay from a later frame does not wait through the frames before it") {
+  // A video is decoded from its start for the references; those frames come at once, and the
+  // recording's clock starts at the first tracked frame (20 Hz: frames 30..34 are due 0.2 s later).
+  const Dataset dataset = openDataset(rendered().video);
+  const std::unique_ptr<StereoSource> source = openDatasetSource(dataset, {.first_frame = 30});
+  pipeline::SourceStageAdapter read(*source, {.realtime = true});
+  pipeline::FrameSlot slot;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::int64_t> arrivals;
+  for (int i = 0; i < 35; ++i) {
+    REQUIRE(read.produce(slot) == pipeline::Produced::kFrame);
+    CHECK(slot.frame.frame_index == i);
+    if (i >= 30) arrivals.push_back(slot.arrival_ns);
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK(seconds >= 0.19);
+  CHECK(seconds < 1.0);  // the 30 frames before the start would take 1.5 s paced
+  for (std::size_t i = 1; i < arrivals.size(); ++i) {
+    CHECK(arrivals[i] - arrivals[0] ==
+          dataset.frames[30 + i].t_ns - dataset.frames[30].t_ns);  // due at the recording's own intervals
+  }
 }
 
 TEST_CASE("pipeline e2e: --format kitti writes the left camera's poses, which voca eval reads as such") {

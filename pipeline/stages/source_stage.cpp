@@ -66,7 +66,9 @@ Produced SourceStageAdapter::produce(FrameSlot& slot) {
   }
   frame.frames_missing_before = 0;
   frame.depth_hint_m = 0.0;
-  if (options_.realtime) {
+  // Frames before the first tracked one (a video decoded from its start for the references) are
+  // not paced: the recording's clock starts where the tracking does.
+  if (options_.realtime && frame.frame_index >= source_.info().first_tracked_frame) {
     std::int64_t due = 0;
     if (!waitUntilDue(t_ns, due)) return Produced::kEnd;
     slot.arrival_ns = due;
