@@ -23,8 +23,14 @@
 
 #include <nlohmann/json.hpp>
 
+extern "C" {
+#include <libavutil/error.h>
+#include <libavutil/log.h>
+}
+
 #include "drivers/encode/live_encoder.h"
 #include "drivers/network/frame_stamp.h"
+#include "drivers/network/open_error.h"
 #include "drivers/network/stream_url.h"
 #include "drivers/network/ts_writer.h"
 #include "drivers/source/dataset_source.h"
@@ -450,6 +456,45 @@ TEST_CASE("stream URLs: a port outside 1..65535 or none is refused by name; a li
   });
   CHECK(error.find("stopped while opening tcp://127.0.0.1:") == 0);
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(10));
+}
+
+TEST_CASE("a stream that cannot be opened says why in libavformat's words, not with its errno") {
+  // A UDP port another socket holds: libavformat returns ENOTTY ("Inappropriate ioctl for device").
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0);
+  socklen_t len = sizeof(addr);
+  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0);
+  const std::string held = "udp://127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  NetworkSourceOptions options;
+  options.start_timeout_s = 2;
+  CHECK(test::inputErrorOf([&] { NetworkStereoSource source(held, options); }) ==
+        "cannot open " + held + ": bind failed: Address already in use");
+  ::close(fd);
+  // A host name that does not resolve: EIO ("Input/output error") on both sides.
+  const std::string unknown = "udp://no-such-host.invalid:5000";
+  const std::string received = test::inputErrorOf([&] { NetworkStereoSource source(unknown, options); });
+  CHECK(received.find("cannot open " + unknown + ": getaddrinfo(no-such-host.invalid, 5000): ") == 0);
+  CHECK(received.find("Input/output error") == std::string::npos);
+  const std::string sent = test::inputErrorOf([&] { network::StereoTsWriter writer(unknown, 64, 64); });
+  CHECK(sent.find("cannot open " + unknown + " for sending: getaddrinfo(no-such-host.invalid, 5000): ") == 0);
+
+  // The capture keeps this thread's error lines only while it lives; the code's own text joins them
+  // when it says something else.
+  {
+    network::OpenErrorCapture capture;
+    av_log(nullptr, AV_LOG_WARNING, "only a warning\n");
+    CHECK(capture.reason(AVERROR(EIO)) == "Input/output error");
+    av_log(nullptr, AV_LOG_ERROR, "first reason\n");
+    av_log(nullptr, AV_LOG_ERROR, "second %s\n", "reason");
+    CHECK(capture.reason(AVERROR(ENOTTY)) == "first reason; second reason");
+    CHECK(capture.reason(AVERROR(ECONNREFUSED)) == "first reason; second reason (Connection refused)");
+  }
+  network::OpenErrorCapture later;
+  CHECK(later.reason(AVERROR(EIO)) == "Input/output error");
 }
 
 TEST_CASE("a receiver with max_frames ends after that many stereo frames, saying so") {

@@ -11,6 +11,7 @@ extern "C" {
 #include <libavutil/error.h>
 }
 
+#include "drivers/network/open_error.h"
 #include "drivers/network/stream_url.h"
 #include "voca/core/error.h"
 
@@ -89,10 +90,11 @@ StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height, st
                                     return stop && stop() ? 1 : 0;
                                   },
                                   &w.stop_requested};
+  network::OpenErrorCapture open_error;
   if (const int r = avio_open2(&w.format->pb, w.url.c_str(), AVIO_FLAG_WRITE, &interrupt, nullptr); r < 0) {
     w.close();
     if (w.stop_requested && w.stop_requested()) throw InputError(fmt::format("stopped while opening {}", url));
-    throw InputError(fmt::format("cannot open {} for sending: {}", url, avError(r)));
+    throw InputError(fmt::format("cannot open {} for sending: {}", url, open_error.reason(r)));
   }
   AVDictionary* options = nullptr;
   // PES packets with their length, so the demuxer emits each one when complete (see the header).

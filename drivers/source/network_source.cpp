@@ -14,6 +14,7 @@ extern "C" {
 }
 
 #include "drivers/network/frame_stamp.h"
+#include "drivers/network/open_error.h"
 #include "drivers/network/stream_url.h"
 #include "voca/core/error.h"
 
@@ -129,11 +130,12 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   av_dict_set(&dict, "fpsprobesize", "0", 0);
   s.armDeadline(options.start_timeout_s);
   const AVInputFormat* mpegts = av_find_input_format("mpegts");
+  network::OpenErrorCapture open_error;
   int r = avformat_open_input(&s.format, url.c_str(), mpegts, &dict);
   av_dict_free(&dict);
   if (r < 0) {
     s.format = nullptr;  // freed by avformat_open_input on failure
-    throw InputError(fmt::format("cannot open {}: {}", url, avError(r)));
+    throw InputError(fmt::format("cannot open {}: {}", url, open_error.reason(r)));
   }
   r = avformat_find_stream_info(s.format, nullptr);
   if (interrupted_) throw InputError(fmt::format("{}: interrupted while waiting for the stream", url));
