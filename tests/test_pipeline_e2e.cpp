@@ -464,12 +464,20 @@ TEST_CASE("pipeline e2e: a run that estimates no pose is an error naming the lik
   CHECK(no_cells.text.find("error: no pose was estimated: all 40 frames were lost") != std::string::npos);
   CHECK(no_cells.text.find("hold 0 grid cells for corners") != std::string::npos);
   CHECK(fs::exists(trajectory));
-  // Too few points for another reason: the generic hint.
+  // A tracker too small for the estimator: the option is named, not the calibration.
   const test::CommandOutput one_point = test::runVocaOutput(run + " --max-points 1");
   INFO(one_point.text);
   CHECK(one_point.exit_code == 1);
   CHECK(one_point.text.find("error: no pose was estimated") != std::string::npos);
-  CHECK(one_point.text.find("Check the calibration") != std::string::npos);
+  CHECK(one_point.text.find("keeps at most 1 point per camera (--max-points), fewer than the 12 a frame needs") !=
+        std::string::npos);
+  CHECK(one_point.text.find("Check the calibration") == std::string::npos);
+  // Too few points for another reason (12 kept, fewer of them matched in both cameras): the generic hint.
+  const test::CommandOutput few_points = test::runVocaOutput(run + " --max-points 12");
+  INFO(few_points.text);
+  CHECK(few_points.exit_code == 1);
+  CHECK(few_points.text.find("error: no pose was estimated") != std::string::npos);
+  CHECK(few_points.text.find("Check the calibration") != std::string::npos);
   // The same video with the default settings estimates its poses: no error.
   const test::CommandOutput normal = test::runVocaOutput(run);
   CHECK(normal.exit_code == 0);

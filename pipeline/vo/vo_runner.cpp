@@ -121,13 +121,19 @@ class ProgressSink final : public FrameSink {
   platform::ProgressLine line_;
 };
 
-// VoRunResult::failure for a run whose every frame was lost, with the likeliest cause: images too
-// small for the detection grid to give a frame the points the estimator needs, else calibration
-// or config (the per-frame messages name each frame's reason).
-std::string noEstimateReason(const VoRunResult& result) {
+// VoRunResult::failure for a run whose every frame was lost, with the likeliest cause: a tracker
+// capacity or images too small for the detection grid to give a frame the points the estimator
+// needs, else calibration or config (the per-frame messages name each frame's reason).
+std::string noEstimateReason(const VoRunResult& result, int max_points) {
   const FrontendConfig& tracker = result.config.frontend;
   const int cells = detectionCells(result.width, result.height, tracker.grid_size_px, tracker.detection_border_px);
   std::string reason = fmt::format("no pose was estimated: all {} frames were lost", result.frames);
+  if (max_points < result.config.backend.min_inliers) {
+    return reason + fmt::format(
+                        ". The tracker keeps at most {} point{} per camera (--max-points), fewer than the {} a "
+                        "frame needs (backend min_inliers)",
+                        max_points, max_points == 1 ? "" : "s", result.config.backend.min_inliers);
+  }
   if (cells < result.config.backend.min_inliers) {
     return reason + fmt::format(
                         ". The {}x{} images hold {} grid cells for corners (frontend grid_size_px {}, "
@@ -437,7 +443,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
   if (options.estimate && !result.pipeline.stopped && !result.pipeline.error && result.frames > 0 &&
       result.backend.keyframes == 0 && result.backend.lost >= result.frames) {
-    result.failure = noEstimateReason(result);
+    result.failure = noEstimateReason(result, options.max_points);
   }
 
   if (options.estimate && options.keep_trajectory && ground_truth && !result.trajectory.poses.empty()) {
