@@ -161,6 +161,13 @@ TEST_CASE("random bytes, empty files, missing files and non-video files are repo
     const std::string message = inputErrorOf([&] { readAll(dir / name); });
     CHECK(message.find(name) != std::string::npos);
   }
+  // What is there but no file says what it is (a device was read without end before).
+  CHECK(inputErrorOf([&] {
+          voca::decode::Demuxer demuxer(dir / "absent.mp4");
+        }).ends_with("absent.mp4: no such video file"));
+  CHECK(inputErrorOf([&] { voca::decode::Demuxer demuxer(dir.path()); }).ends_with(": a folder, not a video file"));
+  CHECK(inputErrorOf([&] { voca::decode::Demuxer demuxer("/dev/zero"); }) ==
+        "/dev/zero: not a regular file (a device or a pipe), not a video file");
 }
 
 TEST_CASE("a stereo dataset with a missing camera stream is reported") {

@@ -36,7 +36,13 @@ struct Demuxer::Impl {
 Demuxer::Demuxer(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()), path_(path) {
   const std::string name = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(name + ": no such video file");
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    const bool exists = std::filesystem::exists(path, ec);
+    throw InputError(name + (!exists                                   ? ": no such video file"
+                             : std::filesystem::is_directory(path, ec) ? ": a folder, not a video file"
+                                                                       : ": not a regular file (a device or a pipe), "
+                                                                         "not a video file"));
+  }
   int rc = avformat_open_input(&impl_->format, name.c_str(), nullptr, nullptr);
   if (rc < 0) {
     throw InputError(name + ": cannot open as a video (" + avErrorText(rc) +
