@@ -8,6 +8,7 @@
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "formats/trajectory/trajectory_io.h"
+#include "pipeline/synth/synth_runner.h"
 #include "tests/test_support.h"
 #include "voca/synth/rigs.h"
 
@@ -233,4 +234,28 @@ TEST_CASE("voca synth --camera: a path that does not exist is named as not found
   CHECK(preset.text.find("--camera 'eurocc': expected 'euroc', 'tumvi' or a calibration file/folder") !=
         std::string::npos);
   CHECK(!fs::exists(scratch / "out"));
+}
+
+TEST_CASE("a stopped synth run keeps the frames it rendered as a complete, shorter sequence") {
+  voca::test::ScratchDir scratch("synth-stopped");
+  voca::pipeline::SynthOptions options;
+  options.out = scratch / "seq";
+  options.seconds = 2.0;  // 40 frames planned
+  options.supersample = 1;
+  options.progress = false;
+  int asked = 0;
+  options.stop_requested = [&] { return ++asked > 6; };
+  const voca::pipeline::SynthResult result = voca::pipeline::synthesizeSequence(options);
+  CHECK(result.stopped);
+  CHECK(result.frames == 6);
+  CHECK(result.planned_frames == 40);
+  // The readers accept it as a six-frame sequence with its ground truth and calibration.
+  const voca::Dataset dataset = voca::openDataset(options.out);
+  CHECK(dataset.frames.size() == 6);
+  REQUIRE(dataset.ground_truth);
+  const voca::Trajectory truth = voca::loadTrajectory(*dataset.ground_truth);
+  REQUIRE(truth.poses.size() == 6);
+  CHECK(truth.poses.back().t_ns == dataset.frames.back().t_ns);
+  REQUIRE(dataset.calibration);
+  CHECK(voca::loadCalibration(*dataset.calibration).cameras.size() == 2);
 }

@@ -251,13 +251,11 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   std::vector<SE3d> exposure_body;  // body poses while the shutter is open, for the current frame
   std::vector<SE3d> exposure_cam;
   std::vector<double> blur_px;
+  int rendered = frames;  // fewer when stopped: what was rendered becomes the sequence
   for (int k = 0; k < frames; ++k) {
     if (options.stop_requested && options.stop_requested()) {
-      SynthResult stopped;
-      stopped.frames = k;
-      stopped.stopped = true;
-      stopped.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      return stopped;
+      rendered = k;
+      break;
     }
     exposure_body.assign(1, seq.T_world_body[k]);
     if (options.exposure_ms > 0.0) {
@@ -303,7 +301,7 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
   writer.finish();
 
   Trajectory ground_truth;
-  for (int k = 0; k < frames; ++k) ground_truth.poses.push_back({seq.t_ns[k], seq.T_world_body[k]});
+  for (int k = 0; k < rendered; ++k) ground_truth.poses.push_back({seq.t_ns[k], seq.T_world_body[k]});
   const fs::path gt_dir = options.out / "mav0" / "state_groundtruth_estimate0";
   fs::create_directories(gt_dir);
   saveTrajectory(ground_truth, gt_dir / "data.csv", TrajectoryFormat::kEuroc);
@@ -311,10 +309,12 @@ SynthResult synthesizeSequence(const SynthOptions& options) {
 
   // Report the true optical flow of cam0 on a coarse grid, so users see what the preset produces.
   std::vector<SE3d> T_world_cam0;
-  for (const SE3d& T : seq.T_world_body) T_world_cam0.push_back(T * rig.cameras[0].T_body_cam);
+  for (int k = 0; k < rendered; ++k) T_world_cam0.push_back(seq.T_world_body[k] * rig.cameras[0].T_body_cam);
   SynthResult result;
-  result.frames = frames;
-  if (!options.trajectory.empty() && frames < trajectoryFrameLimit(options)) {
+  result.frames = rendered;
+  result.planned_frames = frames;
+  result.stopped = rendered < frames;
+  if (!result.stopped && !options.trajectory.empty() && frames < trajectoryFrameLimit(options)) {
     result.warnings.push_back(
         fmt::format("--seconds {}: {} from --start {} s holds only {} frames at {} Hz; wrote those", *options.seconds,
                     options.trajectory.string(), options.start_s, frames, options.rate_hz));

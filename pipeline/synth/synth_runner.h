@@ -32,13 +32,15 @@ struct SynthOptions {
   double exposure_ms = 0.0;  // shutter open time centred on each timestamp; 0 = instantaneous
   double gain = 1.0;         // sensor gain on the scene's irradiance; < 1 = dark, low contrast
   bool progress = true;      // the plan and progress lines on stderr
-  // Asked before each frame; true stops the run early, leaving an incomplete folder.
+  // Asked before each frame; true stops the run early. The frames rendered so far are written as a
+  // complete, shorter sequence (images, ground truth, calibration).
   std::function<bool()> stop_requested;
 };
 
 struct SynthResult {
   int frames = 0;                        // stereo frames written
-  bool stopped = false;                  // stop_requested() ended the run; the folder is incomplete
+  int planned_frames = 0;                // stereo frames the options asked for
+  bool stopped = false;                  // stop_requested() ended the run after `frames` frames
   double seconds = 0.0;                  // wall time of the whole run
   synth::ImageMotionStats motion;        // true optical flow of cam0 between frames (coarse grid)
   std::optional<double> blur_median_px;  // cam0 motion-blur streak per frame (with an exposure only)
@@ -48,7 +50,8 @@ struct SynthResult {
 
 // Validates the options (InputError naming the option), renders every frame with `threads`
 // workers and writes the folder. Progress goes to stderr when options.progress is set. When
-// options.stop_requested turns true it returns early with stopped set (and no motion statistics).
+// options.stop_requested turns true it ends there, writes the frames so far as the sequence and sets
+// stopped.
 SynthResult synthesizeSequence(const SynthOptions& options);
 
 }  // namespace voca::pipeline

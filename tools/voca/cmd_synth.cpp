@@ -5,13 +5,25 @@
 #include <memory>
 
 #include "pipeline/synth/synth_runner.h"
+#include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 
 namespace {
 
-int runSynth(const voca::pipeline::SynthOptions& options) {
+int runSynth(voca::pipeline::SynthOptions options) {
+  // A signal ends the rendering after the current frame; the frames so far are kept as a sequence.
+  voca::platform::installStopHandlers();
+  options.stop_requested = voca::platform::stopRequested;
   const voca::pipeline::SynthResult result = voca::pipeline::synthesizeSequence(options);
   for (const std::string& warning : result.warnings) fmt::print(stderr, "voca synth: warning: {}\n", warning);
+  if (result.stopped) {
+    fmt::print(stderr,
+               "voca synth: stopped by a signal after {} of {} stereo frames: {} holds those {} as a complete, "
+               "shorter sequence (ground truth, calib.json){}\n",
+               result.frames, result.planned_frames, options.out.string(), result.frames,
+               result.frames < 2 ? "; too short to run" : "");
+    return voca::platform::interruptedExitCode(voca::platform::stopSignal());
+  }
   fmt::print(stderr, "voca synth: wrote {} ({} stereo frames, ground truth, calib.json) in {:.1f} s\n",
              options.out.string(), result.frames, result.seconds);
   if (result.motion.samples == 0) {
