@@ -537,14 +537,38 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   options.calibration = *dataset.calibration;
   options.trajectory_file = dir / "trajectory.txt";
   options.statistics_file = dir / "stats.json";
+  // A trajectory an earlier run left there is not this run's: untouched, and not named as its output.
+  std::ofstream(dir / "earlier.txt") << "# an earlier run's trajectory\n";
   const auto start = std::chrono::steady_clock::now();
   options.pipeline.stop_requested = [&] {
     return std::chrono::steady_clock::now() - start > std::chrono::milliseconds(300);
   };
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
   CHECK(result.frames == 0);
+  CHECK_FALSE(result.started);
   CHECK(result.description.find("stopped while waiting for the stream") != std::string::npos);
   CHECK_FALSE(fs::exists(options.trajectory_file));
+  // The summary says why there are no errors, not that the input has no ground truth.
+  std::FILE* summary = std::tmpfile();
+  REQUIRE(summary != nullptr);
+  pipeline::printRunSummary(result, summary);
+  std::rewind(summary);
+  std::string text(4096, '\0');
+  text.resize(std::fread(text.data(), 1, text.size(), summary));
+  std::fclose(summary);
+  CHECK(text.find("ATE/RTE: not computed (stopped before the first frame)") != std::string::npos);
+  CHECK(text.find("no ground truth") == std::string::npos);
+  options.trajectory_file = dir / "earlier.txt";
+  options.input = "udp://127.0.0.1:" + std::to_string(freeUdpPort());
+  const auto again = std::chrono::steady_clock::now();
+  options.pipeline.stop_requested = [&] {
+    return std::chrono::steady_clock::now() - again > std::chrono::milliseconds(300);
+  };
+  CHECK_FALSE(pipeline::runVisualOdometry(options).started);
+  std::ifstream earlier(dir / "earlier.txt");
+  std::string first_line;
+  std::getline(earlier, first_line);
+  CHECK(first_line == "# an earlier run's trajectory");
   std::ifstream in(options.statistics_file);
   REQUIRE(in.good());
   const nlohmann::json stats = nlohmann::json::parse(in);

@@ -431,6 +431,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   pipeline_options.slot_shape = {info.width, info.height, options.max_points};
   pipeline_options.stop_requested = stop_requested;
   Pipeline pipeline(source_stage, chain, pipeline_options);
+  result.started = true;
   result.pipeline = pipeline.run();
   if (result.pipeline.stopped) result.stop_signal = platform::stopSignal();
   result.source = source.counters();
@@ -522,6 +523,8 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
       fmt::print(out, "RTE (6 frames): {:.4f} m RMSE{}\n", r.eval->rte->stats.rmse,
                  r.eval->rte_divergent ? " (divergent)" : "");
     }
+  } else if (!r.started) {
+    fmt::print(out, "ATE/RTE: not computed (stopped before the first frame)\n");
   } else if (!r.ground_truth.empty()) {
     fmt::print(out, "ground truth: {}, not evaluated (see the warning)\n", r.ground_truth);
   } else {

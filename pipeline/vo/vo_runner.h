@@ -86,6 +86,9 @@ struct VoRunResult {
   std::string ground_truth;         // the file evaluated against (also when the evaluation failed: a warning says why)
   SourceCounters source;            // frames the live source lost or could not pair
   int stop_signal = 0;              // the signal that stopped the run early (0: none)
+  // The frames began to flow: the run's outputs (trajectory, overlay, trace) were opened. False for
+  // a run stopped while encoding or waiting for its stream; files at those paths are not its own.
+  bool started = false;
   std::vector<std::string> warnings;
   // Why the run estimated nothing (every frame lost), with a hint at the cause; empty otherwise.
   // Commands report it as an error and exit non-zero: the trajectory holds no estimate.

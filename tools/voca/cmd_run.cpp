@@ -56,8 +56,9 @@ int runRun(const RunOptions& o) {
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
   voca::pipeline::printRunSummary(result, stdout);
-  if (std::filesystem::exists(o.out)) {
-    fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
+  if (result.started) {
+    fmt::print("trajectory: {} ({}, {})\n", o.out, o.format,
+               *format == voca::TrajectoryFormat::kKitti ? "left camera's poses" : "body frame of the calibration");
   } else {
     fmt::print("trajectory: none written (stopped before the first frame)\n");
   }
