@@ -558,6 +558,7 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   std::fclose(summary);
   CHECK(text.find("ATE/RTE: not computed (stopped before the first frame)") != std::string::npos);
   CHECK(text.find("no ground truth") == std::string::npos);
+  CHECK(text.find("pipeline: ") == std::string::npos);  // no threads ran
   options.trajectory_file = dir / "earlier.txt";
   options.input = "udp://127.0.0.1:" + std::to_string(freeUdpPort());
   const auto again = std::chrono::steady_clock::now();

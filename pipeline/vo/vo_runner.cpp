@@ -493,11 +493,13 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
                ms(frontend->service.quantileNs(0.99)), ms(backend->service.quantileNs(0.5)),
                backend->service.meanNs() * 1e-6, ms(backend->service.quantileNs(0.99)));
   }
-  fmt::print(out, "pipeline: {} thread{}{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
-             r.pipeline.threads == 1 ? "" : "s",
-             r.frontend_camera_threads > 1 ? " (and a frontend helper sharing the tracking)" : "",
-             r.pipeline.wall_s > 0.0 ? static_cast<double>(r.pipeline.completed) / r.pipeline.wall_s : 0.0,
-             r.pipeline.wall_s);
+  if (r.started) {
+    fmt::print(out, "pipeline: {} thread{}{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline.threads,
+               r.pipeline.threads == 1 ? "" : "s",
+               r.frontend_camera_threads > 1 ? " (and a frontend helper sharing the tracking)" : "",
+               r.pipeline.wall_s > 0.0 ? static_cast<double>(r.pipeline.completed) / r.pipeline.wall_s : 0.0,
+               r.pipeline.wall_s);
+  }
   if (r.pipeline.dropped > 0 || r.pipeline.damaged > 0) {
     fmt::print(out, "skipped frames: {} dropped (live policy), {} damaged:", r.pipeline.dropped, r.pipeline.damaged);
     int listed = 0;
