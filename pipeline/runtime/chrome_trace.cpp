@@ -7,6 +7,7 @@
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "platform/filesystem/output_paths.h"
@@ -176,7 +177,7 @@ void ChromeTraceWriter::close(const RunReport& report) {
   if (write_failed || rc != 0) throw InputError(fmt::format("error writing trace file {}", path_.string()));
 }
 
-RunReport readTraceReport(const std::filesystem::path& path) {
+RunReport readTraceReport(const std::filesystem::path& path, bool* complete) {
   requireNotDevice(path, "trace file");
   std::ifstream in(path);
   if (!in) throw InputError(fmt::format("{}: cannot open the trace file", path.string()));
@@ -200,6 +201,7 @@ RunReport readTraceReport(const std::filesystem::path& path) {
     throw InputError(fmt::format("{}: not a Chrome trace-event JSON array (as `--trace` writes)", path.string()));
   }
   RunReport report;
+  bool summary_seen = false;
   std::map<std::int64_t, std::int64_t> frame_begin;
   // A stage index as --trace writes it: a whole number below the pipeline's most stages.
   constexpr auto kStageLimit = static_cast<std::size_t>(kMaxStages);
@@ -256,6 +258,7 @@ RunReport readTraceReport(const std::filesystem::path& path) {
         if (f.reason == ReleaseReason::kDropped) ++report.dropped;
         if (f.reason == ReleaseReason::kDamaged) ++report.damaged;
       } else if (ph == "i" && cat == "summary") {
+        summary_seen = true;
         const nlohmann::json& args = e.at("args");
         report.threads = args.value("threads", 1);
         report.produced = args.value("produced", std::int64_t{0});
@@ -282,6 +285,13 @@ RunReport readTraceReport(const std::filesystem::path& path) {
   if (report.stages.empty()) {
     throw InputError(fmt::format("{}: no pipeline stage events (is it a `voca ... --trace` file?)", path.string()));
   }
+  if (!summary_seen) {
+    // The summary says how many threads ran; without it, the distinct threads the stages ran on.
+    std::set<int> threads;
+    for (const StageReport& s : report.stages) threads.insert(s.thread);
+    report.threads = static_cast<int>(threads.size());
+  }
+  if (complete != nullptr) *complete = summary_seen;
   return report;
 }
 

@@ -48,8 +48,9 @@ class ChromeTraceWriter {
 
 // Reads a trace written by ChromeTraceWriter: per-stage service, wait and CPU histograms, end to end,
 // queue high-water marks, drops and damaged frames. Throws InputError naming the file when it is not
-// such a trace.
-RunReport readTraceReport(const std::filesystem::path& path);
+// such a trace. A trace without its closing summary (the run was killed) gives what its events hold:
+// the threads counted from the stage events, no queue high-water marks; *complete says which.
+RunReport readTraceReport(const std::filesystem::path& path, bool* complete = nullptr);
 
 // p50/p90/p99/max per stage and end to end, queue high-water marks, drops: the `--profile` table.
 void printLatencyReport(const RunReport& report, std::FILE* out);

@@ -26,8 +26,14 @@ const bool registered = voca::cli::registerCommand({
           "a frame's arrival to the end of the last stage. A trace cut off by a killed run is read as far as it\n"
           "goes. Open the file itself in https://ui.perfetto.dev for the timeline.");
       return [trace] {
-        const voca::pipeline::RunReport report = voca::pipeline::readTraceReport(*trace);
+        bool complete = true;
+        const voca::pipeline::RunReport report = voca::pipeline::readTraceReport(*trace, &complete);
         voca::pipeline::printLatencyReport(report, stdout);
+        if (!complete) {
+          fmt::print(
+              "note: the trace ends without its summary (the run was killed): the figures cover the frames it "
+              "holds; queue high-water marks are unknown (0)\n");
+        }
         return 0;
       };
     },
