@@ -1,6 +1,8 @@
 // End to end through the `voca` binary: synth -> encode -> `voca mv`, checking that the pictures of
 // what the codec saw are written, sized like the video, and carry vectors on P-frames only.
 
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "drivers/decode/demuxer.h"
@@ -126,4 +128,34 @@ TEST_CASE("voca track --overlay: the tracks as an mp4; an unwritable path fails 
                       (dir / "no-such-folder").string() + " does not exist") != std::string::npos);
   CHECK(bad.text.find("tracks per frame") == std::string::npos);  // no summary of a run that did not happen
   CHECK(bad.text.find("overlay: ") == std::string::npos);
+}
+
+TEST_CASE("voca mv stopped by a signal closes its mp4 properly: it plays the frames drawn so far") {
+  voca::test::ScratchDir dir("mv-signal");
+  const fs::path raw = dir / "raw";
+  const fs::path video = dir / "video";
+  REQUIRE(runVoca("synth --out " + raw.string() + " --seconds 3 --supersample 1 --threads 2") == 0);
+  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+  const fs::path out = dir / "mp4";
+  const fs::path log = dir / "log.txt";
+  const pid_t pid =
+      voca::test::spawnVoca("mv " + video.string() + " --out " + out.string() + " --format mp4", dir.path(), log);
+  // Bytes in the file: the first frames are drawn (the writer creates it empty at the start).
+  REQUIRE(voca::test::signalWhenWritten(pid, out / "mv.mp4", SIGINT));
+  const int exit_code = voca::test::waitExitCode(pid);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CAPTURE(text);
+  CHECK(exit_code == 130);
+  const std::size_t said = text.find("stopped by a signal after ");
+  REQUIRE(said != std::string::npos);
+  const int drawn = std::stoi(text.substr(said + std::string("stopped by a signal after ").size()));
+  CHECK(drawn >= 1);
+  CHECK(drawn < 60);
+  // The index was written: the file opens and holds exactly those frames.
+  voca::decode::Demuxer demuxer(out / "mv.mp4");
+  voca::decode::Packet packet;
+  int packets = 0;
+  while (demuxer.read(packet)) ++packets;
+  CHECK(packets == drawn);
 }

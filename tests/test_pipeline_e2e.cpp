@@ -5,7 +5,6 @@
 
 #include <doctest/doctest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,8 +29,6 @@
 #include "pipeline/vo/vo_runner.h"
 #include "tests/test_support.h"
 #include "tests/test_video_damage.h"
-
-extern char** environ;
 
 using namespace voca;
 namespace fs = std::filesystem;
@@ -118,15 +115,6 @@ class FaultySource final : public StereoSource {
 };
 
 // Starts `voca <args>` with TMPDIR set, output to a log; returns the pid.
-pid_t spawnVoca(const std::string& args, const fs::path& tmpdir, const fs::path& log) {
-  const std::string command = "TMPDIR=" + tmpdir.string() + " exec " + std::string(VOCA_BINARY_DIR) + "/bin/voca " +
-                              args + " > " + log.string() + " 2>&1";
-  const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
-  pid_t pid = 0;
-  REQUIRE(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char* const*>(argv), environ) == 0);
-  return pid;
-}
-
 std::size_t countRows(const fs::path& trajectory) {
   const std::string text = fileText(trajectory);
   const std::size_t lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
@@ -571,9 +559,9 @@ TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a sec
     const fs::path trajectory = dir / ("traj_" + std::to_string(c.signal) + ".txt");
     const fs::path log = dir / ("log_" + std::to_string(c.signal) + ".txt");
     // --encode makes a temporary folder; --realtime paces the 2 s sequence so the signal lands mid-run.
-    const pid_t pid = spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " +
-                                    trajectory.string() + " --stats " + (dir / "stats.json").string(),
-                                tmp, log);
+    const pid_t pid = test::spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " +
+                                          trajectory.string() + " --stats " + (dir / "stats.json").string(),
+                                      tmp, log);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (countRows(trajectory) < 5 && std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -593,9 +581,9 @@ TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a sec
     CHECK(fs::is_empty(tmp));  // the encoded temporary folder is gone
   }
   // A second signal ends the process at once, whatever it was doing.
-  const pid_t pid =
-      spawnVoca("run " + rendered().raw.string() + " --encode 500k --realtime --out " + (dir / "twice.txt").string(),
-                tmp, dir / "twice.log");
+  const pid_t pid = test::spawnVoca(
+      "run " + rendered().raw.string() + " --encode 500k --realtime --out " + (dir / "twice.txt").string(), tmp,
+      dir / "twice.log");
   // Signal only once the handlers are in place (they are installed before --encode makes its
   // temporary folder); a fixed delay raced the process start on a loaded machine.
   const auto started_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
@@ -692,24 +680,13 @@ TEST_CASE("pipeline e2e: a signal stops voca encode cleanly and leaves an earlie
   REQUIRE(before.count("mav0/cam1/data.mp4") == 1);
 
   // Another rate, so a replaced file would differ. The staged video appears once the encoding runs
-  // (the handlers are installed before); the process is held while it gets the signal, so the
-  // signal lands mid-encoding however loaded the machine is.
+  // (the handlers are installed before), so the signal lands mid-encoding.
   const fs::path log = dir / "log.txt";
-  const pid_t pid = spawnVoca(encode + " --bitrate 800k", dir.path(), log);
-  const fs::path staged = out / "mav0" / "cam0" / "data.partial.mp4";
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!fs::exists(staged) && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  kill(pid, SIGSTOP);
-  REQUIRE(fs::exists(staged));
-  kill(pid, SIGINT);
-  kill(pid, SIGCONT);
-  int status = 0;
-  REQUIRE(waitpid(pid, &status, 0) == pid);
+  const pid_t pid = test::spawnVoca(encode + " --bitrate 800k", dir.path(), log);
+  REQUIRE(test::signalWhenWritten(pid, out / "mav0" / "cam0" / "data.partial.mp4", SIGINT));
+  const int exit_code = test::waitExitCode(pid);
   INFO(fileText(log));
-  REQUIRE(WIFEXITED(status));
-  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(exit_code == 130);
   CHECK(fileText(log).find("stopped by a signal before the encoding finished; nothing was written") !=
         std::string::npos);
   CHECK(snapshot() == before);  // same files, same bytes, no temporary file left

@@ -1,6 +1,6 @@
 #pragma once
-// Helpers shared by the test suites: the shared reference data, scratch folders, text files and
-// error messages.
+// Helpers shared by the test suites: the shared reference data, running the `voca` binary, scratch
+// folders, text files and error messages.
 
 #include <doctest/doctest.h>
 
@@ -12,9 +12,16 @@
 #include <random>
 #include <string>
 
+#include <signal.h>
+#include <spawn.h>
 #include <sys/wait.h>
 
+#include <chrono>
+#include <thread>
+
 #include "voca/core/error.h"
+
+extern char** environ;
 
 namespace voca::test {
 
@@ -82,6 +89,44 @@ inline CommandOutput runVocaOutput(const std::string& args) {
   std::error_code ignored;
   std::filesystem::remove(log, ignored);
   return result;
+}
+
+// Starts the built `voca` binary in the background (TMPDIR set to tmpdir, everything it prints to
+// log) and returns its process id; waitExitCode collects it.
+inline pid_t spawnVoca(const std::string& args, const std::filesystem::path& tmpdir, const std::filesystem::path& log) {
+  const std::string command = "TMPDIR=" + tmpdir.string() + " exec " + std::string(VOCA_BINARY_DIR) + "/bin/voca " +
+                              args + " > " + log.string() + " 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
+  pid_t pid = 0;
+  REQUIRE(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char* const*>(argv), environ) == 0);
+  return pid;
+}
+
+// Sends `signal` to the process once `path` exists with more than min_bytes: the process is held
+// (SIGSTOP) the moment the file is seen and gets the signal before it goes on, so the signal lands
+// at that point of its work however loaded the machine is. False when the file did not appear
+// within a minute.
+inline bool signalWhenWritten(pid_t pid, const std::filesystem::path& path, int signal, std::uintmax_t min_bytes = 0) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  std::error_code ec;
+  const auto written = [&] {
+    return std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > min_bytes;
+  };
+  while (!written() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  kill(pid, SIGSTOP);
+  const bool seen = written();
+  kill(pid, signal);
+  kill(pid, SIGCONT);
+  return seen;
+}
+
+// Waits for a process started by spawnVoca; its exit code, or -1 when a signal killed it.
+inline int waitExitCode(pid_t pid) {
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 // A fresh folder under the build tree, removed when the test ends.

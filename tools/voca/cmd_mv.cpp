@@ -18,6 +18,7 @@
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "pipeline/sinks/overlay_sink.h"
+#include "platform/realtime/stop_signal.h"
 #include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
@@ -115,7 +116,15 @@ int runMv(const MvOptions& opts) {
   std::int64_t total_vectors = 0, total_outliers = 0;
   const std::int64_t expected = reader->expectedFrames();
   voca::platform::ProgressLine progress;
+  // A signal ends the drawing after the current frame; the mp4 is then closed properly (its index
+  // written), so it plays.
+  voca::platform::installStopHandlers();
+  bool stopped = false;
   while (reader->next(frame)) {
+    if (voca::platform::stopRequested()) {
+      stopped = true;
+      break;
+    }
     if (frame.frame_index < range.first) continue;  // decoded anyway: later P-frames refer to it
     if (frame.frame_index >= range.end) break;
     if (frame.damaged) {
@@ -140,10 +149,15 @@ int runMv(const MvOptions& opts) {
   }
   if (video) video->finish();
   progress.end();
-  if (written == 0) throw voca::InputError("--frames '" + opts.frames + "': no frame of the video is in this range");
+  if (written == 0 && !stopped)
+    throw voca::InputError("--frames '" + opts.frames + "': no frame of the video is in this range");
   fmt::print("{}: wrote {} frame(s) to {} ({} vectors, {} flagged as likely outliers{})\n", reader->path().string(),
              written, opts.format == "mp4" ? (fs::path(opts.out) / "mv.mp4").string() : opts.out, total_vectors,
              total_outliers, damaged > 0 ? fmt::format("; {} damaged", damaged) : std::string());
+  if (stopped) {
+    fmt::print(stderr, "voca mv: stopped by a signal after {} frame(s)\n", written);
+    return voca::platform::interruptedExitCode(voca::platform::stopSignal());
+  }
   return 0;
 }
 
