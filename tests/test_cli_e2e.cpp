@@ -338,3 +338,27 @@ TEST_CASE("pacing and waiting bounds: NaN, infinite and negative values are refu
     CHECK(result.text.find("expected seconds above 0 and at most 86400") != std::string::npos);
   }
 }
+
+TEST_CASE("voca demo checks its options before making its folder, and a stop removes a shortened rendering") {
+  voca::test::ScratchDir scratch("cli-demo-checks");
+  const fs::path out = scratch / "demo";
+  const auto bad_motion = runVocaOutput("demo --out " + out.string() + " --motion wobbly");
+  CHECK(bad_motion.exit_code == 2);
+  CHECK(bad_motion.text.find("--motion: wobbly not in {gentle,fast-rotation,aggressive}") != std::string::npos);
+  const auto bad_rate = runVocaOutput("demo --out " + out.string() + " --bitrate 5x");
+  CHECK(bad_rate.exit_code == 1);
+  CHECK(bad_rate.text.find("bitrate '5x'") != std::string::npos);
+  CHECK_FALSE(fs::exists(out));
+
+  // Ctrl-C as the rendering starts: the rendering stops, and its shorter sequence is removed so that
+  // --reuse cannot take it for the demo's.
+  const fs::path log = scratch / "log.txt";
+  const pid_t pid = voca::test::spawnVoca("demo --out " + out.string(), scratch.path(), log);
+  REQUIRE(voca::test::signalWhenWritten(pid, log, SIGINT));
+  CHECK(voca::test::waitExitCode(pid) == 130);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CAPTURE(text);
+  CHECK(text.find("voca demo: stopped; the shortened rendering") != std::string::npos);
+  CHECK_FALSE(fs::exists(out / "synth"));
+}

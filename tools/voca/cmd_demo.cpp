@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/encode/video_encoder.h"
 #include "pipeline/vo/vo_runner.h"
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
@@ -34,6 +35,7 @@ struct DemoOptions {
 
 // Runs another registered subcommand (synth, encode, track) as if typed on the command line, so the
 // demo uses exactly the machinery users run by hand.
+// Its exit code; a failure throws, a stop by a signal returns the signal's exit code.
 int runSubcommand(const std::string& name, std::vector<std::string> args) {
   for (const voca::cli::CommandSpec& spec : voca::cli::registeredCommands()) {
     if (spec.name != name) continue;
@@ -46,6 +48,7 @@ int runSubcommand(const std::string& name, std::vector<std::string> args) {
       throw voca::RuntimeFailure(fmt::format("voca {}: {}", name, e.what()));
     }
     const int code = run();
+    if (code != 0 && voca::platform::stopRequested()) return code;
     if (code != 0) throw voca::RuntimeFailure(fmt::format("voca {} failed with exit code {}", name, code));
     return code;
   }
@@ -57,7 +60,12 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 }
 
 int runDemo(const DemoOptions& o) {
+  // Checked before the folder is made (synth and encode would check them only after).
   if (o.seconds < 2.0 || o.seconds > 120.0) throw voca::InputError("--seconds: expected 2 to 120");
+  if (o.threads < 1) throw voca::InputError(fmt::format("--threads {}: expected 1 or more", o.threads));
+  voca::encode::parseBitrate(o.bitrate);
+  // Ctrl-C in any step ends the demo the clean way (the steps stop at a frame boundary).
+  voca::platform::installStopHandlers();
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = o.out;
   const fs::path raw = out / "synth";
@@ -69,14 +77,22 @@ int runDemo(const DemoOptions& o) {
     fmt::print(stderr, "[1/4] rendering {} s of fast motion with `voca synth` into {}\n", o.seconds, raw.string());
     std::error_code ignored;
     fs::remove_all(raw, ignored);
-    runSubcommand("synth", {"--out", raw.string(), "--motion", o.motion, "--seconds", fmt::format("{}", o.seconds),
-                            "--supersample", "2", "--threads", std::to_string(o.threads)});
+    const int code =
+        runSubcommand("synth", {"--out", raw.string(), "--motion", o.motion, "--seconds", fmt::format("{}", o.seconds),
+                                "--supersample", "2", "--threads", std::to_string(o.threads)});
+    if (code != 0) {
+      // A stopped synth keeps a shorter sequence; --reuse must not take it for the demo's.
+      fs::remove_all(raw, ignored);
+      fmt::print(stderr, "voca demo: stopped; the shortened rendering {} was removed\n", raw.string());
+      return code;
+    }
   } else {
     fmt::print(stderr, "[1/4] reusing {}\n", raw.string());
   }
   if (!(o.reuse && have_raw && fs::exists(video / "mav0" / "cam1" / "data.mp4"))) {
     fmt::print(stderr, "[2/4] encoding both cameras at {} with `voca encode` into {}\n", o.bitrate, video.string());
-    runSubcommand("encode", {raw.string(), "--out", video.string(), "--bitrate", o.bitrate});
+    const int code = runSubcommand("encode", {raw.string(), "--out", video.string(), "--bitrate", o.bitrate});
+    if (code != 0) return code;
   }
 
   fmt::print(stderr, "[3/4] running the VO on the decoded video: baseline and VOCA\n");
@@ -90,7 +106,6 @@ int runDemo(const DemoOptions& o) {
   std::vector<Variant> variants = {
       {voca::PriorMode::kNone, fmt::format("baseline ({})", voca::priorModeName(voca::PriorMode::kNone)), {}, {}},
       {voca::PriorMode::kMvParallelOf, fmt::format("VOCA ({})", voca_mode), {}, {}}};
-  voca::platform::installStopHandlers();
   for (Variant& v : variants) {
     voca::pipeline::VoRunOptions options;
     options.input = video;
@@ -107,7 +122,10 @@ int runDemo(const DemoOptions& o) {
 
   const fs::path overlay = out / fmt::format("overlay_{}.mp4", voca_mode);
   fmt::print(stderr, "[4/4] overlay of the VOCA tracks with `voca track --overlay`\n");
-  runSubcommand("track", {video.string(), "--mode", voca_mode, "--overlay", overlay.string()});
+  if (const int code = runSubcommand("track", {video.string(), "--mode", voca_mode, "--overlay", overlay.string()});
+      code != 0) {
+    return code;
+  }
 
   const auto stageMedianMs = [](const voca::pipeline::VoRunResult& r, std::string_view stage) {
     for (const voca::pipeline::StageReport& s : r.pipeline.stages) {
@@ -160,7 +178,8 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--out,-o", o->out, "Folder for the sequences, trajectories and overlay")->capture_default_str();
       app.add_option("--seconds", o->seconds, "Length of the rendered sequence (20 fps)")->capture_default_str();
       app.add_option("--motion", o->motion, "voca synth motion preset: gentle, fast-rotation or aggressive")
-          ->capture_default_str();
+          ->capture_default_str()
+          ->check(CLI::IsMember({"gentle", "fast-rotation", "aggressive"}));
       app.add_option("--bitrate", o->bitrate, "Encoding bitrate per camera")->capture_default_str();
       app.add_option("--threads", o->threads, "Rendering threads")->capture_default_str();
       app.add_flag("--reuse", o->reuse, "Reuse the sequences already rendered and encoded in --out");
