@@ -497,6 +497,77 @@ TEST_CASE("a stream that cannot be opened says why in libavformat's words, not w
   CHECK(later.reason(AVERROR(EIO)) == "Input/output error");
 }
 
+TEST_CASE("over TCP either side listens: every frame arrives, in order") {
+  const fs::path raw = rendered().raw;
+  const Dataset dataset = openDataset(raw);
+  constexpr int kFrames = 12;
+  // Tries `connect` until the listening side is up (a refused connection throws), for up to 20 s.
+  const auto retrying = [](const std::function<void()>& connect) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    for (;;) {
+      try {
+        connect();
+        return;
+      } catch (const InputError&) {
+        if (std::chrono::steady_clock::now() > deadline) throw;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+    }
+  };
+  for (const bool receiver_listens : {true, false}) {
+    CAPTURE(receiver_listens);
+    const std::string address = "tcp://127.0.0.1:" + std::to_string(freeUdpPort());
+    const std::string listening = address + "?listen=1";
+    std::vector<std::int64_t> stamps;
+    std::string receive_error;
+    const auto receive = [&](const std::string& url) {
+      NetworkSourceOptions network;
+      network.start_timeout_s = 20.0;
+      network.timeout_s = 2.0;
+      NetworkStereoSource source(url, network);
+      EncodedStereoPacket packet;
+      while (source.next(packet)) stamps.push_back(packet.t_ns);
+    };
+    pipeline::StreamOptions send = senderOptions(raw, receiver_listens ? address : listening);
+    send.max_frames = kFrames;
+    send.speed = 4.0;
+    pipeline::StreamResult sent;
+    if (receiver_listens) {
+      std::thread receiver([&] {
+        try {
+          receive(listening);
+        } catch (const std::exception& e) {
+          receive_error = e.what();
+        }
+      });
+      const Joined join_receiver(receiver);
+      retrying([&] { sent = pipeline::runStream(send); });
+      receiver.join();
+    } else {
+      std::string send_error;
+      std::thread sender([&] {
+        try {
+          sent = pipeline::runStream(send);
+        } catch (const std::exception& e) {
+          send_error = e.what();
+        }
+      });
+      const Joined join_sender(sender);
+      try {
+        retrying([&] { receive(address); });
+      } catch (const std::exception& e) {
+        receive_error = e.what();
+      }
+      sender.join();
+      CHECK(send_error == "");
+    }
+    CHECK(receive_error == "");
+    CHECK(sent.frames == kFrames);
+    REQUIRE(stamps.size() == static_cast<std::size_t>(kFrames));
+    for (std::size_t i = 0; i < stamps.size(); ++i) CHECK(stamps[i] == dataset.frames[i].t_ns);
+  }
+}
+
 TEST_CASE("a receiver with max_frames ends after that many stereo frames, saying so") {
   const fs::path raw = rendered().raw;
   const int port = freeUdpPort();

@@ -47,7 +47,10 @@ const bool registered = voca::cli::registerCommand({
       auto o = std::make_shared<StreamCli>();
       app.add_option("input", o->input, "Raw stereo dataset (EuRoC/TUM-VI/KITTI folder, or `voca synth` output)")
           ->required();
-      app.add_option("url", o->url, "Where to send: udp://host:port (e.g. udp://127.0.0.1:5000), tcp://host:port")
+      app.add_option("url", o->url,
+                     "Where to send: udp://host:port (e.g. udp://127.0.0.1:5000); tcp://host:port, where one side "
+                     "listens (tcp://0.0.0.0:5000?listen=1 on the receiver's or the sender's URL) and starts first; "
+                     "or a file path (out.ts) to write the multiplex to")
           ->required();
       voca::cli::addEncoderOptions(app, o->encoder);
       app.add_option("--speed", o->speed, "Playback speed factor (1 = the recording's rate)")->capture_default_str();
