@@ -599,6 +599,37 @@ TEST_CASE("pipeline e2e: SIGINT, SIGTERM and SIGHUP stop voca run cleanly; a sec
   CHECK(WEXITSTATUS(status) == 130);
 }
 
+TEST_CASE("pipeline e2e: options that do nothing for the input are named in warnings") {
+  test::ScratchDir dir("pipeline-ignored-options");
+  const auto warningsOf = [&](const fs::path& input, const std::function<void(pipeline::VoRunOptions&)>& set) {
+    pipeline::VoRunOptions options = quietRun(input, dir / "traj.txt", 1);
+    options.max_frames = 3;
+    set(options);
+    const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
+    std::string all;
+    for (const std::string& warning : result.warnings) all += warning + "\n";
+    return all;
+  };
+  const std::string images = warningsOf(rendered().raw, [](pipeline::VoRunOptions& o) {
+    o.speed = 2.0;
+    o.stream_timeout_s = 5.0;
+    o.decoder = decode::DecoderKind::kSoftware;
+  });
+  CHECK(images.find("--speed 2 has no effect without --realtime") != std::string::npos);
+  CHECK(images.find("--stream-wait and --stream-timeout apply to stream URLs only") != std::string::npos);
+  CHECK(images.find("--decoder and --skip-deblock apply to video") != std::string::npos);
+  const std::string video =
+      warningsOf(rendered().video, [](pipeline::VoRunOptions& o) { o.encode_bitrate_bps = 500000; });
+  CHECK(video.find("is encoded video already; it was replayed as it is") != std::string::npos);
+  // Options that act say nothing.
+  const std::string acting = warningsOf(rendered().video, [](pipeline::VoRunOptions& o) {
+    o.realtime = true;
+    o.speed = 4.0;
+    o.decoder = decode::DecoderKind::kSoftware;
+  });
+  CHECK(acting.empty());
+}
+
 TEST_CASE("pipeline e2e: live-rate replay from a later frame does not wait through the frames before it") {
   // A video is decoded from its start for the references; those frames come at once, and the
   // recording's clock starts at the first tracked frame (20 Hz: frames 30..34 are due 0.2 s later).

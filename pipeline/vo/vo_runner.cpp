@@ -206,6 +206,32 @@ void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* d
   for (const NamedPath& output : outputs) requireWritableFile(output);
 }
 
+// What the input makes of the options that do nothing for it: said, instead of silently ignored.
+std::vector<std::string> ignoredOptionWarnings(const VoRunOptions& options, bool stream, DatasetLayout layout) {
+  const VoRunOptions defaults;
+  std::vector<std::string> warnings;
+  if (!options.realtime && options.speed != defaults.speed) {
+    warnings.push_back(fmt::format("--speed {} has no effect without --realtime", options.speed));
+  }
+  if (!stream && (options.stream_start_timeout_s != defaults.stream_start_timeout_s ||
+                  options.stream_timeout_s != defaults.stream_timeout_s)) {
+    warnings.push_back("--stream-wait and --stream-timeout apply to stream URLs only; ignored");
+  }
+  if (stream) return warnings;
+  if (layout == DatasetLayout::kVocaVideo && options.encode_bitrate_bps > 0) {
+    warnings.push_back(
+        fmt::format("--encode: {} is encoded video already; it was replayed as it is", options.input.string()));
+  }
+  const bool decoded = layout == DatasetLayout::kVocaVideo || options.encode_bitrate_bps > 0;
+  if (!decoded && (options.decoder != defaults.decoder || options.skip_deblock)) {
+    warnings.push_back(
+        fmt::format("--decoder and --skip-deblock apply to video; {} holds images (--encode "
+                    "encodes them first)",
+                    options.input.string()));
+  }
+  return warnings;
+}
+
 // `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.
 VoRunResult runOnStream(const VoRunOptions& options) {
   const std::string url = options.input.string();
@@ -248,6 +274,9 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   NetworkStereoSource& source = *opened;
   VoRunResult run = runVisualOdometryOn(source, rig, config, options, gt,
                                         options.ground_truth ? options.ground_truth->string() : std::string());
+  for (std::string& warning : ignoredOptionWarnings(options, true, DatasetLayout::kVocaVideo)) {
+    run.warnings.push_back(std::move(warning));
+  }
   run.config_name = resolved.name;
   run.source_end = source.endReason();
   if (!options.statistics_file.empty()) writeStatisticsJson(run, options.statistics_file);
@@ -273,6 +302,9 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;
+  for (std::string& warning : ignoredOptionWarnings(options, false, raw.layout)) {
+    result.warnings.push_back(std::move(warning));
+  }
   RunConfig resolved = resolveRunConfig(options.config, raw.layout == DatasetLayout::kKitti);
   result.config = std::move(resolved.config);
   result.config_name = std::move(resolved.name);
