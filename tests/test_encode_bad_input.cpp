@@ -37,6 +37,14 @@ FrameSource framesOfSizes(std::vector<std::pair<int, int>> sizes) {
   };
 }
 
+// The test encoder's settings in one pass: quick dataset encodings.
+DatasetEncodeOptions singlePassOptions() {
+  DatasetEncodeOptions options;
+  options.settings = test::testSettings();
+  options.settings.two_pass = false;
+  return options;
+}
+
 }  // namespace
 
 TEST_CASE("bad bitrate strings are InputErrors naming the text") {
@@ -130,9 +138,7 @@ TEST_CASE("an MPEG second pass that cannot reach the bitrate is an InputError, n
 
 TEST_CASE("dataset problems are InputErrors naming the folder") {
   test::ScratchDir dir("encode-bad-dataset");
-  DatasetEncodeOptions options;
-  options.settings = test::testSettings();
-  options.settings.two_pass = false;
+  DatasetEncodeOptions options = singlePassOptions();
 
   const auto missing = dir / "no-such-dataset";
   CHECK(contains(inputErrorOf([&] { encodeDataset(missing, dir / "out", options); }), missing.string()));
@@ -189,9 +195,7 @@ TEST_CASE("dataset problems are InputErrors naming the folder") {
 TEST_CASE("a failed dataset encoding removes what it created and only that; its warnings still arrive") {
   namespace fs = std::filesystem;
   test::ScratchDir dir("encode-cleanup");
-  DatasetEncodeOptions options;
-  options.settings = test::testSettings();
-  options.settings.two_pass = false;
+  DatasetEncodeOptions options = singlePassOptions();
   {
     EurocWriter writer(dir / "raw");
     GrayImage image(64, 48, 90);
@@ -240,9 +244,7 @@ TEST_CASE("a failed dataset encoding removes what it created and only that; its 
 TEST_CASE("a re-encoding that fails or is stopped leaves the previous encoding as it was") {
   namespace fs = std::filesystem;
   test::ScratchDir dir("encode-replace");
-  DatasetEncodeOptions options;
-  options.settings = test::testSettings();
-  options.settings.two_pass = false;
+  DatasetEncodeOptions options = singlePassOptions();
   {
     EurocWriter writer(dir / "raw");
     for (std::int64_t t = 1; t <= 6; ++t) {

@@ -31,15 +31,30 @@ long colouredPixels(const fs::path& png) {
   return coloured;
 }
 
+// `voca synth <synth_args>` into dir/raw, encoded at 500 kbit/s in one pass into dir/video.
+fs::path renderAndEncode(const voca::test::ScratchDir& dir, const std::string& synth_args) {
+  const fs::path raw = dir / "raw", video = dir / "video";
+  REQUIRE(runVoca("synth --out " + raw.string() + " " + synth_args + " --threads 2") == 0);
+  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+  return video;
+}
+
+// The video packets of a file: its frames, when its index was written.
+int packetCount(const fs::path& video) {
+  voca::decode::Demuxer demuxer(video);
+  voca::decode::Packet packet;
+  int packets = 0;
+  while (demuxer.read(packet)) ++packets;
+  return packets;
+}
+
 }  // namespace
 
 TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4") {
   voca::test::ScratchDir dir("mv-cli");
   const fs::path raw = dir / "raw";
-  const fs::path video = dir / "video";
   // 8 frames of fast rotation: tens of pixels of motion, so every P-frame has many inter blocks.
-  REQUIRE(runVoca("synth --out " + raw.string() + " --seconds 0.4 --motion fast-rotation --threads 2") == 0);
-  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+  const fs::path video = renderAndEncode(dir, "--seconds 0.4 --motion fast-rotation");
 
   const fs::path pngs = dir / "png";
   REQUIRE(runVoca("mv " + video.string() + " --out " + pngs.string() + " --frames 0:6") == 0);
@@ -61,13 +76,9 @@ TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4"
 
   const fs::path mp4 = dir / "mp4";
   REQUIRE(runVoca("mv " + video.string() + " --out " + mp4.string() + " --format mp4 --camera 1") == 0);
-  voca::decode::Demuxer demuxer(mp4 / "mv.mp4");
-  CHECK(demuxer.stream().width == 752);
-  CHECK(demuxer.stream().height == 480);
-  voca::decode::Packet packet;
-  int packets = 0;
-  while (demuxer.read(packet)) ++packets;
-  CHECK(packets == 8);
+  CHECK(voca::decode::Demuxer(mp4 / "mv.mp4").stream().width == 752);
+  CHECK(voca::decode::Demuxer(mp4 / "mv.mp4").stream().height == 480);
+  CHECK(packetCount(mp4 / "mv.mp4") == 8);
 
   // A damaged picture is drawn as the decoder concealed it and named; --strict stops there instead.
   voca::test::damagePacket(video / "mav0" / "cam0" / "data.mp4", 3);
@@ -132,10 +143,7 @@ TEST_CASE("voca track --overlay: the tracks as an mp4; an unwritable path fails 
 
 TEST_CASE("voca mv stopped by a signal closes its mp4 properly: it plays the frames drawn so far") {
   voca::test::ScratchDir dir("mv-signal");
-  const fs::path raw = dir / "raw";
-  const fs::path video = dir / "video";
-  REQUIRE(runVoca("synth --out " + raw.string() + " --seconds 3 --supersample 1 --threads 2") == 0);
-  REQUIRE(runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k --single-pass") == 0);
+  const fs::path video = renderAndEncode(dir, "--seconds 3 --supersample 1");
   const fs::path out = dir / "mp4";
   const fs::path log = dir / "log.txt";
   const pid_t pid =
@@ -153,9 +161,5 @@ TEST_CASE("voca mv stopped by a signal closes its mp4 properly: it plays the fra
   CHECK(drawn >= 1);
   CHECK(drawn < 60);
   // The index was written: the file opens and holds exactly those frames.
-  voca::decode::Demuxer demuxer(out / "mv.mp4");
-  voca::decode::Packet packet;
-  int packets = 0;
-  while (demuxer.read(packet)) ++packets;
-  CHECK(packets == drawn);
+  CHECK(packetCount(out / "mv.mp4") == drawn);
 }

@@ -61,8 +61,8 @@ const Rendered& rendered() {
   return sequence;
 }
 
-// A UDP port on 127.0.0.1 that nobody is bound to right now.
-int freeUdpPort() {
+// A UDP socket bound to a free port on 127.0.0.1; the port goes to `port`.
+int boundUdpSocket(int& port) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   REQUIRE(fd >= 0);
   sockaddr_in addr{};
@@ -71,8 +71,15 @@ int freeUdpPort() {
   REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0);
   socklen_t len = sizeof(addr);
   REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0);
-  ::close(fd);
-  return ntohs(addr.sin_port);
+  port = ntohs(addr.sin_port);
+  return fd;
+}
+
+// A UDP port on 127.0.0.1 that nobody is bound to right now.
+int freeUdpPort() {
+  int port = 0;
+  ::close(boundUdpSocket(port));
+  return port;
 }
 
 // Waits (bounded) until some socket is bound to the UDP port: the receiver must listen before the
@@ -460,15 +467,9 @@ TEST_CASE("stream URLs: a port outside 1..65535 or none is refused by name; a li
 
 TEST_CASE("a stream that cannot be opened says why in libavformat's words, not with its errno") {
   // A UDP port another socket holds: libavformat returns ENOTTY ("Inappropriate ioctl for device").
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  REQUIRE(fd >= 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0);
-  socklen_t len = sizeof(addr);
-  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0);
-  const std::string held = "udp://127.0.0.1:" + std::to_string(ntohs(addr.sin_port));
+  int port = 0;
+  const int fd = boundUdpSocket(port);
+  const std::string held = "udp://127.0.0.1:" + std::to_string(port);
   NetworkSourceOptions options;
   options.start_timeout_s = 2;
   CHECK(test::inputErrorOf([&] { NetworkStereoSource source(held, options); }) ==
