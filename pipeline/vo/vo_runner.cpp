@@ -207,7 +207,9 @@ void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* d
 }
 
 // What the input makes of the options that do nothing for it: said, instead of silently ignored.
-std::vector<std::string> ignoredOptionWarnings(const VoRunOptions& options, bool stream, DatasetLayout layout) {
+// layout: the dataset's, or nullopt for a stream.
+std::vector<std::string> ignoredOptionWarnings(const VoRunOptions& options, std::optional<DatasetLayout> layout) {
+  const bool stream = !layout;
   const VoRunOptions defaults;
   std::vector<std::string> warnings;
   if (!options.realtime && options.speed != defaults.speed) {
@@ -218,11 +220,11 @@ std::vector<std::string> ignoredOptionWarnings(const VoRunOptions& options, bool
     warnings.push_back("--stream-wait and --stream-timeout apply to stream URLs only; ignored");
   }
   if (stream) return warnings;
-  if (layout == DatasetLayout::kVocaVideo && options.encode_bitrate_bps > 0) {
+  if (*layout == DatasetLayout::kVocaVideo && options.encode_bitrate_bps > 0) {
     warnings.push_back(
         fmt::format("--encode: {} is encoded video already; it was replayed as it is", options.input.string()));
   }
-  const bool decoded = layout == DatasetLayout::kVocaVideo || options.encode_bitrate_bps > 0;
+  const bool decoded = *layout == DatasetLayout::kVocaVideo || options.encode_bitrate_bps > 0;
   if (!decoded && (options.decoder != defaults.decoder || options.skip_deblock)) {
     warnings.push_back(
         fmt::format("--decoder and --skip-deblock apply to video; {} holds images (--encode "
@@ -274,7 +276,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   NetworkStereoSource& source = *opened;
   VoRunResult run = runVisualOdometryOn(source, rig, config, options, gt,
                                         options.ground_truth ? options.ground_truth->string() : std::string());
-  for (std::string& warning : ignoredOptionWarnings(options, true, DatasetLayout::kVocaVideo)) {
+  for (std::string& warning : ignoredOptionWarnings(options, std::nullopt)) {
     run.warnings.push_back(std::move(warning));
   }
   run.config_name = resolved.name;
@@ -302,7 +304,7 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;
-  for (std::string& warning : ignoredOptionWarnings(options, false, raw.layout)) {
+  for (std::string& warning : ignoredOptionWarnings(options, raw.layout)) {
     result.warnings.push_back(std::move(warning));
   }
   RunConfig resolved = resolveRunConfig(options.config, raw.layout == DatasetLayout::kKitti);
