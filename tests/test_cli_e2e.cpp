@@ -244,6 +244,35 @@ TEST_CASE("voca encode on a folder with a missing and a corrupt image: warning, 
   CHECK(!fs::exists(out));
 }
 
+TEST_CASE("voca encode --pix-fmt gray: a luma-only encoding that decodes with vectors; other codecs refuse it") {
+  voca::test::ScratchDir dir("cli-encode-gray");
+  const fs::path raw = dir / "raw";
+  requireSuccess(runVocaOutput("synth --out " + raw.string() + " --motion gentle --seconds 1"), "voca synth");
+  const fs::path video = dir / "video";
+  const auto encoded =
+      runVocaOutput("encode " + raw.string() + " --out " + video.string() + " --single-pass --pix-fmt gray");
+  requireSuccess(encoded, "voca encode --pix-fmt gray");
+  CHECK(encoded.text.find("gray 4:0:0") != std::string::npos);
+  voca::decode::VideoReader reader(video / "mav0" / "cam0" / "data.mp4", {}, {});
+  voca::decode::DecodedFrame frame;
+  int frames = 0, with_vectors = 0;
+  while (reader.next(frame)) {
+    ++frames;
+    with_vectors += frame.motion.hasVectors() ? 1 : 0;
+  }
+  CHECK(frames == 20);
+  CHECK(with_vectors == frames - 1);  // every frame after the first I-frame
+
+  const fs::path refused = dir / "refused";
+  const auto mpeg4 = runVocaOutput("encode " + raw.string() + " --out " + refused.string() +
+                                   " --single-pass --codec mpeg4 --pix-fmt gray");
+  INFO(mpeg4.text);
+  CHECK(mpeg4.exit_code == 1);
+  CHECK(mpeg4.text.find("--pix-fmt gray: only libx264 codes frames without chroma; --codec mpeg4 takes yuv420p") !=
+        std::string::npos);
+  CHECK(!fs::exists(refused));
+}
+
 TEST_CASE("a path the system refuses is an error naming it, not an internal error") {
   voca::test::ScratchDir dir("cli-fs-error");
   const fs::path suite = dir / "suite.json";

@@ -72,8 +72,10 @@ std::vector<GrayImage> render(const WaveTexture& texture, const Motion& to_textu
 }
 
 void encode(const std::filesystem::path& path, const std::vector<GrayImage>& frames, const std::string& codec,
-            bool two_pass = true, std::int64_t bitrate_bps = 2000000, const std::string& extra_x264_params = "") {
+            bool two_pass = true, std::int64_t bitrate_bps = 2000000, const std::string& extra_x264_params = "",
+            bool monochrome = false) {
   voca::encode::EncoderSettings settings;
+  settings.monochrome = monochrome;
   settings.two_pass = two_pass;
   settings.x264_params += extra_x264_params;
   settings.codec = codec;              // libx264 keeps the paper's x264 parameters (quarter-pel, no B-frames)
@@ -182,6 +184,44 @@ TEST_CASE("H.264 vectors of a sub-pixel translation match the true motion") {
   for (int y = 0; y < kHeight; ++y)
     for (int x = 0; x < kWidth; ++x) err += std::abs(int(truth[3](x, y)) - int(frames[3].luma(x, y)));
   CHECK(err / (kWidth * kHeight) < 6.0);  // mean absolute error at 2 Mbit/s is a few grey levels
+}
+
+TEST_CASE("a 4:0:0 (gray) H.264 stream decodes to the same kind of frames and vectors as a 4:2:0 one") {
+  voca::test::ScratchDir dir("decode-monochrome");
+  const WaveTexture texture(13);
+  const Motion motion = [](const Eigen::Vector2d& p, int k) {
+    return Eigen::Vector2d(p.x() - 0.75 * k, p.y() + 1.25 * k);
+  };
+  const std::vector<GrayImage> truth = render(texture, motion);
+  encode(dir / "yuv420p.mp4", truth, "libx264");
+  encode(dir / "gray.mp4", truth, "libx264", true, 2000000, "", /*monochrome=*/true);
+  const std::vector<DecodedFrame> yuv420p = decodeAll(dir / "yuv420p.mp4");
+  const std::vector<DecodedFrame> gray = decodeAll(dir / "gray.mp4");
+  REQUIRE(gray.size() == std::size_t(kFrames));
+  REQUIRE(yuv420p.size() == gray.size());
+  CHECK(gray[0].motion.pictureType() == voca::PictureType::kI);
+  for (int k = 1; k < kFrames; ++k) {
+    CHECK(gray[k].motion.pictureType() == voca::PictureType::kP);
+    CHECK(gray[k].motion.hasVectors());
+  }
+  // Without chroma the encoder searches and codes the same luma: its vectors follow the true
+  // motion as closely as those of the 4:2:0 stream, and the pictures are as close to the input.
+  const Agreement a_gray = compare(gray, motion, 0.25), a_yuv = compare(yuv420p, motion, 0.25);
+  MESSAGE("4:0:0 " << a_gray.within << "/" << a_gray.blocks << ", 4:2:0 " << a_yuv.within << "/" << a_yuv.blocks
+                   << " blocks within 0.25 px");
+  CHECK(a_gray.blocks > 200);
+  CHECK(a_gray.fraction() >= 0.90);
+  CHECK(a_gray.fraction() >= a_yuv.fraction() - 0.03);
+  for (int k : {0, 3, kFrames - 1}) {
+    double err_gray = 0, err_yuv = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        err_gray += std::abs(int(truth[k](x, y)) - int(gray[k].luma(x, y)));
+        err_yuv += std::abs(int(truth[k](x, y)) - int(yuv420p[k].luma(x, y)));
+      }
+    CHECK(err_gray / (kWidth * kHeight) < 6.0);
+    CHECK(err_gray < 1.3 * err_yuv);
+  }
 }
 
 TEST_CASE("skipping the deblocking filter keeps the vectors exact and changes only the pictures' filtering") {

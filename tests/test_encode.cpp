@@ -165,6 +165,7 @@ TEST_CASE("odd frame sizes are coded whole: decoders return the original size, l
     CHECK(result.width == width);
     CHECK(result.height == height);
     const test::VideoProbe probe = test::probeVideo(dir / "odd.mp4", true);
+    if (std::string(codec) == "libx264") CHECK(probe.chroma_format_idc == 0);
     CHECK(probe.width == width);
     CHECK(probe.height == height);
     REQUIRE(probe.luma.size() == frames.size());
@@ -179,6 +180,32 @@ TEST_CASE("odd frame sizes are coded whole: decoders return the original size, l
       return sum / height;
     };
     CHECK(lastColumnError(probe.luma[0], frames[0]) < 8.0);
+  }
+}
+
+TEST_CASE("monochrome: libx264 stores luma alone (4:0:0) where the default stores 4:2:0; other codecs refuse") {
+  const int width = 160, height = 128;
+  const std::vector<GrayImage> frames = makeSequence(width, height, 10);
+  test::ScratchDir dir("encode-monochrome");
+  EncoderSettings settings = test::testSettings();
+  settings.two_pass = false;
+  settings.bitrate_bps = 1000000;
+  encodeVideoFile(dir / "yuv420p.mp4", settings, sourceOf(frames));
+  settings.monochrome = true;
+  encodeVideoFile(dir / "gray.mp4", settings, sourceOf(frames));
+  const test::VideoProbe yuv420p = test::probeVideo(dir / "yuv420p.mp4", true);
+  const test::VideoProbe gray = test::probeVideo(dir / "gray.mp4", true);
+  CHECK(yuv420p.chroma_format_idc == 1);
+  CHECK(gray.chroma_format_idc == 0);
+  REQUIRE(gray.luma.size() == frames.size());
+  for (std::size_t i : {std::size_t{0}, frames.size() - 1}) {
+    CHECK(psnr(gray.luma[i], frames[i], width, height) > 30.0);
+    CHECK(std::fabs(meanOf(gray.luma[i]) - meanOf(frames[i])) < 1.0);  // full range, as 4:2:0
+  }
+  for (const char* codec : {"mpeg4", "mpeg2video"}) {
+    CAPTURE(codec);
+    settings.codec = codec;
+    CHECK_THROWS_AS(encodeVideoFile(dir / "refused.mp4", settings, sourceOf(frames)), InputError);
   }
 }
 

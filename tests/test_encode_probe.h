@@ -98,9 +98,39 @@ inline encode::EncoderSettings testSettings() {
   return settings;
 }
 
+// chroma_format_idc of the first SPS in an avcC record; 1 (the default) for profiles that do not
+// code it; -1 when the record is not one. Reads exp-Golomb fields; the SPS's first bytes hold no
+// emulation-prevention bytes for the ids and profiles written here.
+inline int h264ChromaFormatIdc(const std::uint8_t* avcc, int size) {
+  if (avcc == nullptr || size < 12 || avcc[0] != 1 || (avcc[5] & 0x1f) == 0) return -1;
+  const std::uint8_t* sps = avcc + 8;  // after version, profile, compatibility, level, length size, count, length
+  const int sps_size = (avcc[6] << 8) | avcc[7];
+  if (8 + sps_size > size || sps_size < 5 || (sps[0] & 0x1f) != 7) return -1;
+  const int profile_idc = sps[1];
+  if (profile_idc != 100 && profile_idc != 110 && profile_idc != 122 && profile_idc != 244) return 1;
+  int bit = 4 * 8;  // after the NAL header, profile_idc, constraint flags and level_idc
+  const auto readBit = [&] {
+    const int value = (sps[bit / 8] >> (7 - bit % 8)) & 1;
+    ++bit;
+    return value;
+  };
+  const auto readUe = [&] {
+    int zeros = 0;
+    while (readBit() == 0 && zeros < 16) ++zeros;
+    int value = 0;
+    for (int i = 0; i < zeros; ++i) value = (value << 1) | readBit();
+    return (1 << zeros) - 1 + value;
+  };
+  readUe();         // seq_parameter_set_id
+  return readUe();  // chroma_format_idc
+}
+
 // What the file holds, as read back independently of the encoder.
 struct VideoProbe {
   std::string codec_name;
+  // H.264 only, from the first SPS of the .mp4's avcC record: 0 = 4:0:0 (luma alone), 1 = 4:2:0.
+  // FFmpeg decodes both to yuv420p (a 4:0:0 picture gets neutral chroma), so the stream says it.
+  int chroma_format_idc = -1;
   int width = 0, height = 0;
   AVRational avg_frame_rate{0, 1};
   int num_packets = 0;
@@ -120,6 +150,7 @@ inline VideoProbe probeVideo(const std::filesystem::path& path, bool keep_luma =
   if (index < 0) throw std::runtime_error("no video stream");
   AVStream* stream = format->streams[index];
   probe.codec_name = avcodec_get_name(stream->codecpar->codec_id);
+  probe.chroma_format_idc = h264ChromaFormatIdc(stream->codecpar->extradata, stream->codecpar->extradata_size);
   probe.width = stream->codecpar->width;
   probe.height = stream->codecpar->height;
   probe.avg_frame_rate = stream->avg_frame_rate;

@@ -273,6 +273,10 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   const int coded_width = width;
   const int coded_height = height;
   const bool odd_size = (width % 2) != 0 || (height % 2) != 0;
+  if (settings.monochrome && settings.codec != "libx264") {
+    throw InputError(
+        fmt::format("4:0:0 (gray) coding: only libx264 codes frames without chroma, not {}", settings.codec));
+  }
   if (hardware && odd_size) {
     throw InputError(fmt::format("frame size {}x{}: {} needs even sizes", width, height, settings.codec));
   }
@@ -307,9 +311,9 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   ctx->width = coded_width;
   ctx->height = coded_height;
   // VAAPI encodes GPU surfaces (uploaded from nv12, the format every VAAPI driver takes).
-  ctx->pix_fmt = vaapi                                     ? AV_PIX_FMT_VAAPI
-                 : settings.codec == "libx264" && odd_size ? AV_PIX_FMT_GRAY8
-                                                           : AV_PIX_FMT_YUV420P;
+  ctx->pix_fmt = vaapi                                                              ? AV_PIX_FMT_VAAPI
+                 : settings.codec == "libx264" && (odd_size || settings.monochrome) ? AV_PIX_FMT_GRAY8
+                                                                                    : AV_PIX_FMT_YUV420P;
   // Gray images use the full 0..255 range; signalling it keeps the luma values as they are instead
   // of squeezing them into studio range 16..235 as a swscale conversion would.
   ctx->color_range = AVCOL_RANGE_JPEG;
