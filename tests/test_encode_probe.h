@@ -98,19 +98,16 @@ inline encode::EncoderSettings testSettings() {
   return settings;
 }
 
-// chroma_format_idc of the first SPS in an avcC record; 1 (the default) for profiles that do not
-// code it; -1 when the record is not one. Reads exp-Golomb fields; the SPS's first bytes hold no
-// emulation-prevention bytes for the ids and profiles written here.
-inline int h264ChromaFormatIdc(const std::uint8_t* avcc, int size) {
-  if (avcc == nullptr || size < 12 || avcc[0] != 1 || (avcc[5] & 0x1f) == 0) return -1;
-  const std::uint8_t* sps = avcc + 8;  // after version, profile, compatibility, level, length size, count, length
-  const int sps_size = (avcc[6] << 8) | avcc[7];
-  if (8 + sps_size > size || sps_size < 5 || (sps[0] & 0x1f) != 7) return -1;
+// chroma_format_idc of an H.264 SPS NAL unit (header byte included); 1 (the default) for profiles
+// that do not code it; -1 when it is not an SPS. Reads exp-Golomb fields; the SPS's first bytes
+// hold no emulation-prevention bytes for the ids and profiles written here.
+inline int h264SpsChromaFormatIdc(const std::uint8_t* sps, int size) {
+  if (sps == nullptr || size < 5 || (sps[0] & 0x1f) != 7) return -1;
   const int profile_idc = sps[1];
   if (profile_idc != 100 && profile_idc != 110 && profile_idc != 122 && profile_idc != 244) return 1;
   int bit = 4 * 8;  // after the NAL header, profile_idc, constraint flags and level_idc
   const auto readBit = [&] {
-    const int value = (sps[bit / 8] >> (7 - bit % 8)) & 1;
+    const int value = bit / 8 < size ? (sps[bit / 8] >> (7 - bit % 8)) & 1 : 1;
     ++bit;
     return value;
   };
@@ -123,6 +120,24 @@ inline int h264ChromaFormatIdc(const std::uint8_t* avcc, int size) {
   };
   readUe();         // seq_parameter_set_id
   return readUe();  // chroma_format_idc
+}
+
+// The same for the first SPS of an .mp4's avcC record.
+inline int h264ChromaFormatIdc(const std::uint8_t* avcc, int size) {
+  if (avcc == nullptr || size < 12 || avcc[0] != 1 || (avcc[5] & 0x1f) == 0) return -1;
+  const int sps_size = (avcc[6] << 8) | avcc[7];  // after version, profile, compatibility, level, length size, count
+  if (8 + sps_size > size) return -1;
+  return h264SpsChromaFormatIdc(avcc + 8, sps_size);
+}
+
+// The same for the first SPS in an Annex-B byte stream (in-band headers, as a live stream has).
+inline int h264AnnexBChromaFormatIdc(const std::vector<std::uint8_t>& bytes) {
+  for (std::size_t i = 0; i + 3 < bytes.size(); ++i) {
+    if (bytes[i] == 0 && bytes[i + 1] == 0 && bytes[i + 2] == 1 && (bytes[i + 3] & 0x1f) == 7) {
+      return h264SpsChromaFormatIdc(bytes.data() + i + 3, static_cast<int>(bytes.size() - i - 3));
+    }
+  }
+  return -1;
 }
 
 // What the file holds, as read back independently of the encoder.

@@ -71,6 +71,7 @@ EncoderSettings lowLatencySettings(EncoderKind kind, const LiveEncoderSettings& 
   settings.x264_params = lowLatencyX264Params(live.gop);
   settings.threads = 1;  // no frame threads: they would hold frames back
   settings.global_header = live.global_header;
+  settings.monochrome = live.monochrome;
   return settings;
 }
 
@@ -106,8 +107,9 @@ EncoderChoice selectEncoder(const LiveEncoderSettings& live, const EncoderProbe&
   const bool automatic = live.kind == EncoderKind::kAuto;
   const auto describe = [&](EncoderKind kind) {
     choice.kind = kind;
-    choice.description = fmt::format("encoder: {} ({}, {} kbit/s, GOP {})", encoderKindName(kind),
-                                     encoderCodecName(kind), live.bitrate_bps / 1000, live.gop);
+    choice.description =
+        fmt::format("encoder: {} ({}, {} kbit/s, GOP {}{})", encoderKindName(kind), encoderCodecName(kind),
+                    live.bitrate_bps / 1000, live.gop, live.monochrome ? ", gray 4:0:0" : "");
     return choice;
   };
   const auto attempt = [&](EncoderKind kind, bool present, const std::string& missing) -> bool {
@@ -128,12 +130,16 @@ EncoderChoice selectEncoder(const LiveEncoderSettings& live, const EncoderProbe&
     }
     return false;
   };
-  const bool m2m = probe.v4l2m2m_present && probe.v4l2m2m_present();
-  if (attempt(EncoderKind::kV4l2m2m, m2m, "no V4L2 memory-to-memory H.264 encoder node")) {
+  // Hardware encoders code 4:2:0 only: asked for luma alone, they are not tried.
+  const std::string chroma_only = "codes 4:2:0 only, and luma alone (gray, 4:0:0) was asked for";
+  const bool m2m = !live.monochrome && probe.v4l2m2m_present && probe.v4l2m2m_present();
+  if (attempt(EncoderKind::kV4l2m2m, m2m,
+              live.monochrome ? chroma_only : "no V4L2 memory-to-memory H.264 encoder node")) {
     return describe(EncoderKind::kV4l2m2m);
   }
-  const bool vaapi = probe.vaapi_present && probe.vaapi_present(live.vaapi_device);
-  if (attempt(EncoderKind::kVaapi, vaapi, "no VAAPI render node " + live.vaapi_device)) {
+  const bool vaapi = !live.monochrome && probe.vaapi_present && probe.vaapi_present(live.vaapi_device);
+  if (attempt(EncoderKind::kVaapi, vaapi,
+              live.monochrome ? chroma_only : "no VAAPI render node " + live.vaapi_device)) {
     return describe(EncoderKind::kVaapi);
   }
   // libx264 is part of the build; it can still fail to open (bad settings), which is an error.

@@ -34,6 +34,8 @@ struct LiveEncoderSettings {
   // SPS/PPS out of band, as an .mp4 needs (`voca record`); false: in band, repeated at each keyframe,
   // as a stream needs (`voca stream`).
   bool global_header = false;
+  // Luma alone (4:0:0): x264 only, so auto then skips the hardware encoders, which code 4:2:0.
+  bool monochrome = false;
 };
 
 // Sets fps_num/fps_den from a rate in Hz (exact to 1/1000 Hz: 29.97 -> 29970/1000). Throws InputError

@@ -15,6 +15,12 @@ void addEncoderOptions(CLI::App& app, EncoderCli& cli) {
   app.add_option("--gop", cli.gop, "Frames between keyframes (a receiver recovers from loss at the next one)")
       ->capture_default_str();
   app.add_option("--vaapi-device", cli.vaapi_device, "VAAPI render node for --encoder vaapi")->capture_default_str();
+  app.add_option("--pix-fmt", cli.pix_fmt,
+                 "yuv420p (luma plus neutral chroma, what every decoder takes) or gray (x264 only: luma alone, "
+                 "4:0:0; a software decoder then skips the chroma planes, but hardware decoders commonly take "
+                 "4:2:0 only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"yuv420p", "gray"}));
 }
 
 encode::LiveEncoderSettings liveEncoderSettings(const EncoderCli& cli) {
@@ -24,6 +30,7 @@ encode::LiveEncoderSettings liveEncoderSettings(const EncoderCli& cli) {
   if (cli.gop < 1) throw InputError(fmt::format("--gop: expected at least 1 frame, got {}", cli.gop));
   live.gop = cli.gop;
   live.vaapi_device = cli.vaapi_device;
+  live.monochrome = cli.pix_fmt == "gray";
   return live;
 }
 

@@ -14,6 +14,7 @@ struct EncoderCli {
   std::string bitrate = "1M";
   int gop = 120;
   std::string vaapi_device = "/dev/dri/renderD128";
+  std::string pix_fmt = "yuv420p";
 };
 
 // Declares the options on a command.
