@@ -45,8 +45,8 @@ struct EncoderSettings {
   std::string vaapi_device = "/dev/dri/renderD128";  // h264_vaapi only: the render node
   // libx264 only: code luma alone (4:0:0, High profile) instead of 4:2:0 with neutral chroma. The
   // cameras are monochrome, so the bits hardly change, but a decoder then has no chroma planes to
-  // reconstruct (about 13 % of a software decode here). Off by default: the paper coded yuv420p, and
-  // hardware decoders commonly take 4:2:0 only. Odd frame sizes are always coded 4:0:0.
+  // reconstruct (about a tenth of a software decode). Off by default: the paper coded yuv420p,
+  // and hardware decoders commonly take 4:2:0 only. Odd frame sizes are always coded 4:0:0.
   bool monochrome = false;
 };
 

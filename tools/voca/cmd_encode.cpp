@@ -211,7 +211,7 @@ const bool registered = voca::cli::registerCommand(
            ->check(CLI::IsMember({"libx264", "mpeg4", "mpeg2video"}));
        app.add_option("--pix-fmt", options->pix_fmt,
                       "yuv420p (the paper: luma plus neutral chroma) or gray (libx264 only: luma alone, 4:0:0; "
-                      "software decoders then skip the chroma planes, about 13 % of a decode, but hardware "
+                      "software decoders then skip the chroma planes, about a tenth of a decode, but hardware "
                       "decoders commonly take 4:2:0 only; odd frame sizes are always gray)")
            ->capture_default_str()
            ->check(CLI::IsMember({"yuv420p", "gray"}));
