@@ -647,3 +647,96 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   const nlohmann::json stats = nlohmann::json::parse(in);
   CHECK(stats["frames"] == 0);
 }
+
+TEST_CASE("a stream recorded to a file replays every frame, exactly as the offline run on the same frames") {
+  const test::ScratchDir dir("stream-recorded");
+  const fs::path raw = rendered().raw;
+  const Dataset dataset = openDataset(raw);
+  REQUIRE(dataset.calibration);
+  const StereoRig rig = loadCalibration(*dataset.calibration);
+  const fs::path recording = dir / "seq.ts";
+  pipeline::StreamOptions send = senderOptions(raw, recording.string());
+  send.speed = 50.0;  // a file does not need the real rate
+  const pipeline::StreamResult sent = pipeline::runStream(send);
+  const auto n = static_cast<std::int64_t>(dataset.frames.size());
+  REQUIRE(sent.frames == n);
+
+  const std::optional<std::string> url = recordedStreamUrl(recording);
+  REQUIRE(url);
+  CHECK(*url == "file://" + fs::absolute(recording).string());
+  CHECK(isRecordedStreamUrl(*url));
+  CHECK_FALSE(isRecordedStreamUrl("udp://127.0.0.1:5000"));
+
+  // Not live: the pipeline waits for each stage instead of dropping the frames the source reads
+  // faster than the VO runs, so the poses are the offline run's on the same encoded frames, bit for bit.
+  NetworkStereoSource source(*url);
+  CHECK_FALSE(source.info().live);
+  CHECK(source.info().description.find("recorded stream file://") == 0);
+  const pipeline::VoRunResult replayed = pipeline::runVisualOdometryOn(source, rig, VocaConfig{}, quietOptions());
+  CHECK(source.endReason() == "end of stream");
+  const std::vector<Received> local = encodeLocally(raw);
+  MemorySource offline_source(source.info(), local);
+  const pipeline::VoRunResult offline =
+      pipeline::runVisualOdometryOn(offline_source, rig, VocaConfig{}, quietOptions());
+  REQUIRE_FALSE(replayed.pipeline.error);
+  REQUIRE_FALSE(offline.pipeline.error);
+  CHECK(replayed.pipeline.dropped == 0);
+  REQUIRE(replayed.trajectory.poses.size() == static_cast<std::size_t>(n));
+  REQUIRE(offline.trajectory.poses.size() == static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < replayed.trajectory.poses.size(); ++i) {
+    INFO("frame " << i);
+    CHECK(replayed.trajectory.poses[i].t_ns == offline.trajectory.poses[i].t_ns);
+    CHECK(replayed.trajectory.poses[i].T_world_body.translation() ==
+          offline.trajectory.poses[i].T_world_body.translation());
+  }
+
+  // `voca run seq.ts` is the same as `voca run file://.../seq.ts`: every frame, the same trajectory.
+  pipeline::VoRunOptions options = quietOptions();
+  options.calibration = *dataset.calibration;
+  std::array<pipeline::VoRunResult, 2> runs;
+  for (std::size_t k = 0; k < 2; ++k) {
+    options.input = k == 0 ? recording : fs::path(*url);
+    runs[k] = pipeline::runVisualOdometry(options);
+    REQUIRE_FALSE(runs[k].pipeline.error);
+    CHECK(runs[k].pipeline.dropped == 0);
+    CHECK(runs[k].frames == n);
+    CHECK(runs[k].description.find("recorded stream") == 0);
+  }
+  REQUIRE(runs[0].trajectory.poses.size() == runs[1].trajectory.poses.size());
+  for (std::size_t i = 0; i < runs[0].trajectory.poses.size(); ++i) {
+    CHECK(runs[0].trajectory.poses[i].T_world_body.translation() ==
+          runs[1].trajectory.poses[i].T_world_body.translation());
+  }
+
+  // An output onto the recording is refused before anything is written; the recording is intact.
+  const auto size = fs::file_size(recording);
+  for (const fs::path& input : {recording, fs::path(*url)}) {
+    options.input = input;
+    options.trajectory_file = recording;
+    const std::string expected = "is the recorded stream (" + fs::absolute(recording).string() + ")";
+    CHECK_THROWS_WITH_AS(pipeline::runVisualOdometry(options), doctest::Contains(expected.c_str()), InputError);
+  }
+  CHECK(fs::file_size(recording) == size);
+}
+
+TEST_CASE("a file that is not a VOCA recording is refused by name") {
+  const test::ScratchDir dir("stream-not-recorded");
+  // Too short, or not MPEG-TS: not taken for a recording (voca run then says it is not a dataset folder).
+  std::ofstream(dir / "text.ts") << "not a transport stream\n";
+  CHECK_FALSE(recordedStreamUrl(dir / "text.ts"));
+  CHECK_FALSE(recordedStreamUrl(dir / "missing.ts"));
+  CHECK_FALSE(recordedStreamUrl(dir.path()));
+  // TS packets without a VOCA stereo stream in them: opened, and refused for what they hold.
+  {
+    std::ofstream junk(dir / "junk.ts", std::ios::binary);
+    for (int i = 0; i < 20; ++i) {
+      std::string packet(188, '\0');
+      packet[0] = 0x47;
+      junk << packet;
+    }
+  }
+  const std::optional<std::string> url = recordedStreamUrl(dir / "junk.ts");
+  REQUIRE(url);
+  CHECK_THROWS_WITH_AS(NetworkStereoSource{*url}, doctest::Contains("junk.ts: not a VOCA stereo recording"),
+                       InputError);
+}

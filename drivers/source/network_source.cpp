@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <fstream>
 #include <optional>
 
 #include <fmt/core.h>
@@ -70,6 +71,22 @@ bool isStreamUrl(const std::string& input) {
                      [](char c) { return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '+'; });
 }
 
+bool isRecordedStreamUrl(const std::string& url) { return url.rfind("file://", 0) == 0; }
+
+std::optional<std::string> recordedStreamUrl(const std::filesystem::path& path) {
+  constexpr std::size_t kTsPacket = 188;
+  constexpr char kSync = 0x47;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return std::nullopt;
+  std::ifstream file(path, std::ios::binary);
+  std::array<char, 2 * kTsPacket + 1> head{};
+  file.read(head.data(), static_cast<std::streamsize>(head.size()));
+  if (file.gcount() != static_cast<std::streamsize>(head.size())) return std::nullopt;
+  if (head[0] != kSync || head[kTsPacket] != kSync || head[2 * kTsPacket] != kSync) return std::nullopt;
+  // libavformat's file protocol takes the path after "file:"; an absolute one keeps "file://" a URL.
+  return "file://" + std::filesystem::absolute(path).string();
+}
+
 struct NetworkStereoSource::Impl {
   std::string url;
   NetworkSourceOptions options;
@@ -101,6 +118,7 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   Impl& s = *impl_;
   s.url = url;
   s.options = options;
+  const bool recording = isRecordedStreamUrl(url);
   s.interrupted = &interrupted_;
   if (!isStreamUrl(url)) throw InputError(fmt::format("'{}' is not a stream URL (e.g. udp://127.0.0.1:5000)", url));
   network::requireStreamPort(url);
@@ -139,6 +157,12 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   }
   r = avformat_find_stream_info(s.format, nullptr);
   if (interrupted_) throw InputError(fmt::format("{}: interrupted while waiting for the stream", url));
+  if (recording && (r < 0 || s.format->nb_streams == 0)) {
+    throw InputError(
+        fmt::format("{}: not a VOCA stereo recording (two H.264 cameras in one MPEG-TS, as `voca stream "
+                    "<dataset> out.ts` writes)",
+                    url));
+  }
   if (r < 0 || nowNs() > s.deadline_ns) {
     throw InputError(fmt::format("{}: no VOCA stereo stream arrived within {} s (is `voca stream` sending to it?)", url,
                                  options.start_timeout_s));
@@ -182,10 +206,11 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
                                  info_.streams[0].height, info_.streams[1].width, info_.streams[1].height));
   }
   info_.kind = SourceKind::kEncoded;
-  info_.live = true;
+  info_.live = !recording;
   info_.width = info_.streams[0].width;
   info_.height = info_.streams[0].height;
-  info_.description = fmt::format("network stream {} (2x {}x{} h264, MPEG-TS)", url, info_.width, info_.height);
+  info_.description = fmt::format("{} {} (2x {}x{} h264, MPEG-TS)", recording ? "recorded stream" : "network stream",
+                                  url, info_.width, info_.height);
 }
 
 NetworkStereoSource::~NetworkStereoSource() = default;

@@ -13,8 +13,10 @@
 
 #include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "drivers/source/stereo_source.h"
@@ -32,11 +34,20 @@ struct NetworkSourceOptions {
 // True for input names libavformat opens as a network stream (udp://, tcp://, rtp://, srt://, ...).
 bool isStreamUrl(const std::string& input);
 
+// A stream recorded to a file (`voca stream <dataset> out.ts`) is replayed from a file:// URL. It is
+// not live: the file is read as fast as the pipeline takes frames, so every frame is tracked, as
+// from a dataset folder (`--realtime` paces it at its stamps instead).
+bool isRecordedStreamUrl(const std::string& url);
+
+// The file:// URL of `path` when it is a regular file that starts like an MPEG-TS (a sync byte
+// every 188 bytes), nullopt otherwise.
+std::optional<std::string> recordedStreamUrl(const std::filesystem::path& path);
+
 class NetworkStereoSource : public StereoSource {
  public:
   // Opens the URL and waits (up to start_timeout_s, or until interrupt()) until both cameras'
-  // streams are known. Throws InputError when no VOCA stereo stream arrives in that time or the
-  // stream is not two H.264 cameras of one size.
+  // streams are known. Throws InputError when no VOCA stereo stream arrives in that time (a
+  // recording: when the file holds none) or the stream is not two H.264 cameras of one size.
   explicit NetworkStereoSource(const std::string& url, const NetworkSourceOptions& options = {});
   ~NetworkStereoSource() override;
 

@@ -179,9 +179,10 @@ namespace {
 
 // Before anything is written: no output may be a file the run reads or lie in the dataset's data
 // folders (`-o mav0/cam0/data.mp4` truncated the video it was about to decode), and no two outputs
-// may be one file. dataset: nullptr for a stream.
+// may be one file. dataset: nullptr for a stream; recording: the file a recorded stream is read from.
 void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* dataset,
-                                   const std::optional<std::filesystem::path>& calibration) {
+                                   const std::optional<std::filesystem::path>& calibration,
+                                   const std::optional<std::filesystem::path>& recording = std::nullopt) {
   const std::array<NamedPath, 4> outputs = {NamedPath{"the trajectory file", options.trajectory_file},
                                             NamedPath{"the statistics file", options.statistics_file},
                                             NamedPath{"the trace file", options.pipeline.trace_path},
@@ -198,6 +199,7 @@ void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* d
     }
     if (dataset->ground_truth) inputs.push_back({"the ground truth", *dataset->ground_truth});
   }
+  if (recording) inputs.push_back({"the recorded stream", *recording});
   if (options.ground_truth) inputs.push_back({"the ground truth", *options.ground_truth});
   if (calibration) inputs.push_back({"the calibration", *calibration});
   if (options.config && std::filesystem::exists(*options.config)) inputs.push_back({"the config", *options.config});
@@ -235,14 +237,21 @@ std::vector<std::string> ignoredOptionWarnings(const VoRunOptions& options, std:
 }
 
 // `voca run udp://...`: a stream carries no calibration or ground truth, so both come from options.
-VoRunResult runOnStream(const VoRunOptions& options) {
-  const std::string url = options.input.string();
+// A stream URL, or a recording of one (`url` is then its file:// URL).
+VoRunResult runOnStream(const VoRunOptions& options, const std::string& url) {
+  const bool recording = isRecordedStreamUrl(url);
   if (!options.calibration) {
     throw InputError(fmt::format("{}: a stream carries no calibration; pass the cameras' with --calib", url));
   }
   if (options.encode_bitrate_bps > 0) throw InputError(fmt::format("{}: --encode applies to raw datasets only", url));
-  if (options.first_frame > 0) throw InputError(fmt::format("{}: --start-frame applies to recordings only", url));
-  requireOutputsApartFromInputs(options, nullptr, options.calibration);
+  if (options.first_frame > 0) {
+    throw InputError(fmt::format("{}: --start-frame applies to dataset folders only", url));
+  }
+  // libavformat's file protocol opens what follows "file:".
+  const std::optional<std::filesystem::path> recording_file =
+      recording ? std::optional<std::filesystem::path>(std::filesystem::path(url.substr(5)).lexically_normal())
+                : std::nullopt;
+  requireOutputsApartFromInputs(options, nullptr, options.calibration, recording_file);
   const StereoRig rig = loadCalibration(*options.calibration);
   if (rig.cameras.size() < 2) {
     throw InputError(fmt::format("{}: need a stereo calibration", options.calibration->string()));
@@ -257,7 +266,7 @@ VoRunResult runOnStream(const VoRunOptions& options) {
   network.max_frames = options.max_frames;
   network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
                                                            : std::function<bool()>(platform::stopRequested);
-  if (options.progress) {
+  if (options.progress && !recording) {
     fmt::print(stderr, "waiting for the stream on {} (up to {} s)\n", url, options.stream_start_timeout_s);
   }
   std::optional<NetworkStereoSource> opened;
@@ -300,7 +309,10 @@ int frontendCameraThreads(const VoRunOptions& options) {
 }  // namespace
 
 VoRunResult runVisualOdometry(const VoRunOptions& options) {
-  if (isStreamUrl(options.input.string())) return runOnStream(options);
+  if (isStreamUrl(options.input.string())) return runOnStream(options, options.input.string());
+  if (const std::optional<std::string> recording = recordedStreamUrl(options.input)) {
+    return runOnStream(options, *recording);
+  }
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;

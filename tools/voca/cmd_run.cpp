@@ -72,11 +72,11 @@ const bool registered = voca::cli::registerCommand({
     .configure = [](CLI::App& app) -> Runner {
       auto o = std::make_shared<RunOptions>();
       app.add_option("input", o->input,
-                     "Raw dataset (EuRoC/TUM-VI/KITTI folder), VOCA video folder, or a stream URL that `voca stream` "
-                     "sends to (udp://127.0.0.1:5000)")
+                     "Raw dataset (EuRoC/TUM-VI/KITTI folder), VOCA video folder, a stream URL that `voca stream` "
+                     "sends to (udp://127.0.0.1:5000), or a stream it recorded to a file (out.ts)")
           ->required();
       app.add_option("--calib", o->calib,
-                     "Calibration file (default: the one found with the dataset; required for a stream URL)");
+                     "Calibration file (default: the one found with the dataset; required for a stream URL or file)");
       app.add_option("--config", o->config,
                      "Config JSON file, or a shipped config by name: euroc, tumvi, kitti (default: euroc; kitti for "
                      "KITTI folders)");
@@ -115,7 +115,9 @@ const bool registered = voca::cli::registerCommand({
           "good pose) are reported on stderr and counted.\n"
           "A stream URL is decoded and estimated as frames arrive (live policy: a stage that falls behind\n"
           "drops the oldest waiting frame); frames lost on the network are skipped and counted, the VO goes\n"
-          "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly.\n\n" +
+          "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly. A stream recorded to a file\n"
+          "(`voca stream seq out.ts`, or file:///path/out.ts) replays like a dataset: every frame, as fast as\n"
+          "the pipeline goes (--realtime paces it at its stamps).\n\n" +
           voca::cli::pipelineHelpFooter());
       return [o] { return runRun(*o); };
     },
