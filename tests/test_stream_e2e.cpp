@@ -648,6 +648,18 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   CHECK(stats["frames"] == 0);
 }
 
+namespace {
+
+// `voca stream <rendered> <file>`: the rendered sequence recorded to an MPEG-TS file.
+void recordStream(const fs::path& file) {
+  pipeline::StreamOptions send = senderOptions(rendered().raw, file.string());
+  send.speed = 50.0;  // a file does not need the real rate
+  const pipeline::StreamResult sent = pipeline::runStream(send);
+  REQUIRE(sent.frames == static_cast<std::int64_t>(openDataset(rendered().raw).frames.size()));
+}
+
+}  // namespace
+
 TEST_CASE("a stream recorded to a file replays every frame, exactly as the offline run on the same frames") {
   const test::ScratchDir dir("stream-recorded");
   const fs::path raw = rendered().raw;
@@ -655,11 +667,8 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
   REQUIRE(dataset.calibration);
   const StereoRig rig = loadCalibration(*dataset.calibration);
   const fs::path recording = dir / "seq.ts";
-  pipeline::StreamOptions send = senderOptions(raw, recording.string());
-  send.speed = 50.0;  // a file does not need the real rate
-  const pipeline::StreamResult sent = pipeline::runStream(send);
+  recordStream(recording);
   const auto n = static_cast<std::int64_t>(dataset.frames.size());
-  REQUIRE(sent.frames == n);
 
   const std::optional<std::string> url = recordedStreamUrl(recording);
   REQUIRE(url);
@@ -739,4 +748,38 @@ TEST_CASE("a file that is not a VOCA recording is refused by name") {
   REQUIRE(url);
   CHECK_THROWS_WITH_AS(NetworkStereoSource{*url}, doctest::Contains("junk.ts: not a VOCA stereo recording"),
                        InputError);
+}
+
+TEST_CASE("a recording with TS packets missing: counted and skipped to the next keyframe, or --strict stops there") {
+  const test::ScratchDir dir("stream-recorded-damaged");
+  const Dataset dataset = openDataset(rendered().raw);
+  REQUIRE(dataset.calibration);
+  const auto n = static_cast<std::int64_t>(dataset.frames.size());
+  recordStream(dir / "seq.ts");
+  // Three TS packets cut out at 40 % of the file, as a recorder that lost a write would leave it:
+  // the demuxer sees the continuity counter jump and flags the access unit corrupt.
+  std::ifstream in(dir / "seq.ts", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t cut = bytes.size() / 188 * 2 / 5 * 188;
+  std::ofstream(dir / "damaged.ts", std::ios::binary) << bytes.substr(0, cut) << bytes.substr(cut + 3 * 188);
+
+  pipeline::VoRunOptions options = quietOptions();
+  options.input = dir / "damaged.ts";
+  options.calibration = *dataset.calibration;
+  const pipeline::VoRunResult skipped = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(skipped.pipeline.error);
+  CHECK(skipped.source.frames_lost > 0);
+  CHECK(skipped.source.frames_lost <= kGop);  // up to the next keyframe of both cameras
+  CHECK(skipped.frames + skipped.source.frames_lost == n);
+  CHECK(skipped.source_end == "end of stream");
+
+  options.strict = true;
+  const pipeline::VoRunResult stopped = pipeline::runVisualOdometry(options);
+  REQUIRE(stopped.pipeline.error);
+  CHECK(stopped.pipeline.error->message.find("damaged.ts: an access unit of camera") != std::string::npos);
+  CHECK(stopped.pipeline.error->message.find("(--strict stops at the first loss)") != std::string::npos);
+  // Everything before the loss was estimated: the frames up to the cut, none after it.
+  CHECK(stopped.trajectory.poses.size() > 0);
+  CHECK(static_cast<std::int64_t>(stopped.trajectory.poses.size()) + skipped.source.frames_lost < n);
+  CHECK(stopped.source.frames_lost == 0);
 }

@@ -245,6 +245,10 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
         // accuracy the decoders restart cleanly at the next keyframe of both cameras instead (the
         // decode stage copes with withheld pictures either way). The pairs skipped count as lost.
         const bool continuous = s.last_index >= 0 && index == s.last_index + 1;
+        if (s.options.strict && s.last_index >= 0 && !continuous) {
+          throw InputError(fmt::format("{}: frames {} to {} were lost (--strict stops at the first loss)", s.url,
+                                       s.last_index + 1, index - 1));
+        }
         if (!continuous && !(left.idr && right.idr)) {
           s.pending[0].pop();
           s.pending[1].pop();
@@ -267,6 +271,12 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
         return true;
       }
       const std::size_t older = left.stamp.frame_index < right.stamp.frame_index ? 0 : 1;
+      if (s.options.strict && s.last_index >= 0) {
+        throw InputError(
+            fmt::format("{}: frame {} of camera {} has no partner from the other camera (--strict stops "
+                        "at the first loss)",
+                        s.url, s.pending[older].front().stamp.frame_index, older));
+      }
       s.pending[older].pop();
       ++unpaired_;
     }
@@ -277,7 +287,15 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
     if (r < 0) {
       // Frames that arrived after the last pair handed on (waiting for a keyframe or a partner)
       // are lost too.
-      if (s.last_index >= 0 && s.max_index > s.last_index) frames_lost_ += s.max_index - s.last_index;
+      if (s.last_index >= 0 && s.max_index > s.last_index) {
+        if (s.options.strict && !interrupted_ && r != AVERROR_EXIT) {
+          throw InputError(
+              fmt::format("{}: frames {} to {} arrived without their partners before the end (--strict "
+                          "stops at the first loss)",
+                          s.url, s.last_index + 1, s.max_index));
+        }
+        frames_lost_ += s.max_index - s.last_index;
+      }
       s.max_index = s.last_index;
       if (interrupted_) {
         end_reason_ = "interrupted";
@@ -299,10 +317,23 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
     const std::optional<network::FrameStamp> stamp = network::readStamp(bytes);
     // Damaged (TS packets lost inside it) or unstamped: unusable; the gap it leaves is counted when
     // the next pair goes out. Stale (older than what was handed on): late or duplicated.
-    if ((s.packet->flags & AV_PKT_FLAG_CORRUPT) != 0 || !stamp || stamp->frame_index <= s.last_index) continue;
+    const bool damaged = (s.packet->flags & AV_PKT_FLAG_CORRUPT) != 0 || !stamp;
+    if (s.options.strict && damaged && s.last_index >= 0) {
+      throw InputError(
+          fmt::format("{}: an access unit of camera {} after frame {} arrived {} (--strict stops at the "
+                      "first loss)",
+                      s.url, camera, s.last_index, stamp ? "damaged (TS packets missing)" : "unstamped"));
+    }
+    if (damaged || stamp->frame_index <= s.last_index) continue;
     s.max_index = std::max(s.max_index, stamp->frame_index);
     PendingRing& ring = s.pending[camera];
     if (ring.full()) {  // the other camera has been silent for kPendingDepth frames
+      if (s.options.strict && s.last_index >= 0) {
+        throw InputError(
+            fmt::format("{}: camera {} sent nothing for {} frames after frame {} (--strict stops at the "
+                        "first loss)",
+                        s.url, 1 - camera, kPendingDepth, s.last_index));
+      }
       ring.pop();
       ++unpaired_;
     }

@@ -29,6 +29,9 @@ struct NetworkSourceOptions {
   // Polled while waiting (e.g. SIGINT): true ends the wait like interrupt() does.
   std::function<bool()> stop_requested;
   std::int64_t max_frames = 0;  // end after this many stereo frames (0: when the stream does)
+  // Stop at the first frame lost or damaged (next() throws InputError naming it) instead of counting
+  // it and resuming at the next keyframe: `--strict`, e.g. to check that a recording is whole.
+  bool strict = false;
 };
 
 // True for input names libavformat opens as a network stream (udp://, tcp://, rtp://, srt://, ...).
@@ -53,7 +56,7 @@ class NetworkStereoSource : public StereoSource {
 
   const SourceInfo& info() const override { return info_; }
   // Blocks until the next pair is complete; false when the stream has ended (no data for
-  // timeout_s) or after interrupt().
+  // timeout_s) or after interrupt(). Strict: throws InputError at the first loss.
   bool next(EncodedStereoPacket& packet) override;
   void interrupt() override { interrupted_ = true; }
   SourceCounters counters() const override;

@@ -264,6 +264,7 @@ VoRunResult runOnStream(const VoRunOptions& options, const std::string& url) {
   network.start_timeout_s = options.stream_start_timeout_s;
   network.timeout_s = options.stream_timeout_s;
   network.max_frames = options.max_frames;
+  network.strict = options.strict;
   network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
                                                            : std::function<bool()>(platform::stopRequested);
   if (options.progress && !recording) {
