@@ -717,6 +717,20 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
           runs[1].trajectory.poses[i].T_world_body.translation());
   }
 
+  // --start-frame and --frames as on a dataset: frames 10..29 tracked (the earlier ones decoded only).
+  options.input = recording;
+  options.first_frame = 10;
+  options.max_frames = 20;
+  const pipeline::VoRunResult later = pipeline::runVisualOdometry(options);
+  REQUIRE_FALSE(later.pipeline.error);
+  CHECK(later.frames == 20);
+  REQUIRE(later.trajectory.poses.size() == 20);
+  CHECK(later.trajectory.poses.front().t_ns == dataset.frames[10].t_ns);
+  CHECK(later.trajectory.poses.back().t_ns == dataset.frames[29].t_ns);
+  CHECK(later.source_end == "20 frames received (--frames)");
+  options.first_frame = 0;
+  options.max_frames = 0;
+
   // An output onto the recording is refused before anything is written; the recording is intact.
   const auto size = fs::file_size(recording);
   for (const fs::path& input : {recording, fs::path(*url)}) {

@@ -99,6 +99,7 @@ struct NetworkStereoSource::Impl {
   std::int64_t last_index = -1;  // the sender's frame index of the last pair handed on
   std::int64_t max_index = -1;   // the highest frame index that arrived from either camera
   std::int64_t pairs_out = 0;
+  std::int64_t tracked_out = 0;  // pairs out from options.first_frame on
 
   static int interruptCallback(void* opaque) {
     const auto* self = static_cast<const Impl*>(opaque);
@@ -122,6 +123,7 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   s.interrupted = &interrupted_;
   if (!isStreamUrl(url)) throw InputError(fmt::format("'{}' is not a stream URL (e.g. udp://127.0.0.1:5000)", url));
   network::requireStreamPort(url);
+  if (options.first_frame < 0) throw InputError("the first frame to track must not be negative");
   if (!(options.timeout_s > 0.0) || !(options.start_timeout_s > 0.0)) {
     throw InputError("network timeouts must be positive");
   }
@@ -207,6 +209,7 @@ NetworkStereoSource::NetworkStereoSource(const std::string& url, const NetworkSo
   }
   info_.kind = SourceKind::kEncoded;
   info_.live = !recording;
+  info_.first_tracked_frame = options.first_frame;
   info_.width = info_.streams[0].width;
   info_.height = info_.streams[0].height;
   info_.description = fmt::format("{} {} (2x {}x{} h264, MPEG-TS)", recording ? "recorded stream" : "network stream",
@@ -229,7 +232,7 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
       end_reason_ = "interrupted";
       return false;
     }
-    if (s.options.max_frames > 0 && s.pairs_out >= s.options.max_frames) {
+    if (s.options.max_frames > 0 && s.tracked_out >= s.options.max_frames) {
       end_reason_ = fmt::format("{} frames received (--frames)", s.options.max_frames);
       return false;
     }
@@ -268,6 +271,7 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
           s.pending[c].pop();
         }
         ++s.pairs_out;
+        if (index >= s.options.first_frame) ++s.tracked_out;
         return true;
       }
       const std::size_t older = left.stamp.frame_index < right.stamp.frame_index ? 0 : 1;

@@ -28,7 +28,10 @@ struct NetworkSourceOptions {
   double timeout_s = 3.0;         // no data for this long once started = the sender has stopped
   // Polled while waiting (e.g. SIGINT): true ends the wait like interrupt() does.
   std::function<bool()> stop_requested;
-  std::int64_t max_frames = 0;  // end after this many stereo frames (0: when the stream does)
+  std::int64_t max_frames = 0;  // end after this many tracked stereo frames (0: when the stream does)
+  // A recording started later (`--start-frame`): the pairs before this sender frame index are
+  // decoded (later frames reference them) but not tracked (SourceInfo::first_tracked_frame).
+  std::int64_t first_frame = 0;
   // Stop at the first frame lost or damaged (next() throws InputError naming it) instead of counting
   // it and resuming at the next keyframe: `--strict`, e.g. to check that a recording is whole.
   bool strict = false;

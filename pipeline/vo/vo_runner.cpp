@@ -244,8 +244,8 @@ VoRunResult runOnStream(const VoRunOptions& options, const std::string& url) {
     throw InputError(fmt::format("{}: a stream carries no calibration; pass the cameras' with --calib", url));
   }
   if (options.encode_bitrate_bps > 0) throw InputError(fmt::format("{}: --encode applies to raw datasets only", url));
-  if (options.first_frame > 0) {
-    throw InputError(fmt::format("{}: --start-frame applies to dataset folders only", url));
+  if (options.first_frame > 0 && !recording) {
+    throw InputError(fmt::format("{}: --start-frame applies to recordings only (folders, recorded .ts files)", url));
   }
   // libavformat's file protocol opens what follows "file:".
   const std::optional<std::filesystem::path> recording_file =
@@ -265,6 +265,7 @@ VoRunResult runOnStream(const VoRunOptions& options, const std::string& url) {
   network.timeout_s = options.stream_timeout_s;
   network.max_frames = options.max_frames;
   network.strict = options.strict;
+  network.first_frame = options.first_frame;
   network.stop_requested = options.pipeline.stop_requested ? options.pipeline.stop_requested
                                                            : std::function<bool()>(platform::stopRequested);
   if (options.progress && !recording) {
