@@ -50,7 +50,7 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("url", o->url,
                      "Where to send: udp://host:port (e.g. udp://127.0.0.1:5000); tcp://host:port, where one side "
                      "listens (tcp://0.0.0.0:5000?listen=1 on the receiver's or the sender's URL) and starts first; "
-                     "or a file path (out.ts) to write the multiplex to")
+                     "or a file path (out.ts) to write the multiplex to, which `voca run out.ts` replays")
           ->required();
       voca::cli::addEncoderOptions(app, o->encoder);
       app.add_option("--speed", o->speed, "Playback speed factor (1 = the recording's rate)")->capture_default_str();
@@ -59,7 +59,9 @@ const bool registered = voca::cli::registerCommand({
           "Both cameras go in one MPEG-TS multiplex (two H.264 streams, no B-frames, one reference, no\n"
           "look-ahead, constant bitrate), each access unit sent the moment it is encoded and stamped with the\n"
           "frame's sensor time (an SEI message), which the receiver pairs the cameras by. Receive with\n"
-          "`voca run <url> --calib <calibration>` started first. The chosen encoder is printed in one line.");
+          "`voca run <url> --calib <calibration>` started first. The chosen encoder is printed in one line.\n"
+          "A file is written as fast as --speed allows and replayed with `voca run out.ts --calib ...`, every\n"
+          "frame (`--speed 50` records a dataset in a fraction of its duration).");
       return [o] { return runStreamCommand(*o); };
     },
 });
