@@ -674,6 +674,7 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
   REQUIRE(url);
   CHECK(*url == "file://" + fs::absolute(recording).string());
   CHECK(isRecordedStreamUrl(*url));
+  CHECK(recordedStreamFile(*url) == fs::absolute(recording));
   CHECK_FALSE(isRecordedStreamUrl("udp://127.0.0.1:5000"));
 
   // Not live: the pipeline waits for each stage instead of dropping the frames the source reads

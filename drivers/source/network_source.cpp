@@ -5,6 +5,8 @@
 #include <chrono>
 #include <fstream>
 #include <optional>
+#include <string_view>
+#include <utility>
 
 #include <fmt/core.h>
 
@@ -73,6 +75,11 @@ bool isStreamUrl(const std::string& input) {
 
 bool isRecordedStreamUrl(const std::string& url) { return url.rfind("file://", 0) == 0; }
 
+std::filesystem::path recordedStreamFile(const std::string& url) {
+  // The file protocol opens what follows "file:" ("///abs/path" is "/abs/path").
+  return std::filesystem::path(url.substr(std::string_view("file:").size())).lexically_normal();
+}
+
 std::optional<std::string> recordedStreamUrl(const std::filesystem::path& path) {
   constexpr std::size_t kTsPacket = 188;
   constexpr char kSync = 0x47;
@@ -107,6 +114,15 @@ struct NetworkStereoSource::Impl {
     return (self->interrupted->load() || nowNs() > self->deadline_ns.load()) ? 1 : 0;
   }
   void armDeadline(double seconds) { deadline_ns = nowNs() + static_cast<std::int64_t>(seconds * 1e9); }
+
+  // Strict, once the first pair went out (joining a stream before its first keyframe loses nothing):
+  // the loss `what` ends the stream with an error instead of being counted.
+  template <typename... Args>
+  void failIfStrict(fmt::format_string<Args...> what, Args&&... args) const {
+    if (!options.strict || last_index < 0) return;
+    throw InputError(
+        fmt::format("{}: {} (--strict stops at the first loss)", url, fmt::format(what, std::forward<Args>(args)...)));
+  }
 
   ~Impl() {
     if (format != nullptr) avformat_close_input(&format);
@@ -248,10 +264,7 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
         // accuracy the decoders restart cleanly at the next keyframe of both cameras instead (the
         // decode stage copes with withheld pictures either way). The pairs skipped count as lost.
         const bool continuous = s.last_index >= 0 && index == s.last_index + 1;
-        if (s.options.strict && s.last_index >= 0 && !continuous) {
-          throw InputError(fmt::format("{}: frames {} to {} were lost (--strict stops at the first loss)", s.url,
-                                       s.last_index + 1, index - 1));
-        }
+        if (!continuous) s.failIfStrict("frames {} to {} were lost", s.last_index + 1, index - 1);
         if (!continuous && !(left.idr && right.idr)) {
           s.pending[0].pop();
           s.pending[1].pop();
@@ -275,12 +288,8 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
         return true;
       }
       const std::size_t older = left.stamp.frame_index < right.stamp.frame_index ? 0 : 1;
-      if (s.options.strict && s.last_index >= 0) {
-        throw InputError(
-            fmt::format("{}: frame {} of camera {} has no partner from the other camera (--strict stops "
-                        "at the first loss)",
-                        s.url, s.pending[older].front().stamp.frame_index, older));
-      }
+      s.failIfStrict("frame {} of camera {} has no partner from the other camera",
+                     s.pending[older].front().stamp.frame_index, older);
       s.pending[older].pop();
       ++unpaired_;
     }
@@ -292,11 +301,9 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
       // Frames that arrived after the last pair handed on (waiting for a keyframe or a partner)
       // are lost too.
       if (s.last_index >= 0 && s.max_index > s.last_index) {
-        if (s.options.strict && !interrupted_ && r != AVERROR_EXIT) {
-          throw InputError(
-              fmt::format("{}: frames {} to {} arrived without their partners before the end (--strict "
-                          "stops at the first loss)",
-                          s.url, s.last_index + 1, s.max_index));
+        if (!interrupted_ && r != AVERROR_EXIT) {
+          s.failIfStrict("frames {} to {} arrived without their partners before the end", s.last_index + 1,
+                         s.max_index);
         }
         frames_lost_ += s.max_index - s.last_index;
       }
@@ -322,22 +329,15 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
     // Damaged (TS packets lost inside it) or unstamped: unusable; the gap it leaves is counted when
     // the next pair goes out. Stale (older than what was handed on): late or duplicated.
     const bool damaged = (s.packet->flags & AV_PKT_FLAG_CORRUPT) != 0 || !stamp;
-    if (s.options.strict && damaged && s.last_index >= 0) {
-      throw InputError(
-          fmt::format("{}: an access unit of camera {} after frame {} arrived {} (--strict stops at the "
-                      "first loss)",
-                      s.url, camera, s.last_index, stamp ? "damaged (TS packets missing)" : "unstamped"));
+    if (damaged) {
+      s.failIfStrict("an access unit of camera {} after frame {} arrived {}", camera, s.last_index,
+                     stamp ? "damaged (TS packets missing)" : "unstamped");
     }
     if (damaged || stamp->frame_index <= s.last_index) continue;
     s.max_index = std::max(s.max_index, stamp->frame_index);
     PendingRing& ring = s.pending[camera];
     if (ring.full()) {  // the other camera has been silent for kPendingDepth frames
-      if (s.options.strict && s.last_index >= 0) {
-        throw InputError(
-            fmt::format("{}: camera {} sent nothing for {} frames after frame {} (--strict stops at the "
-                        "first loss)",
-                        s.url, 1 - camera, kPendingDepth, s.last_index));
-      }
+      s.failIfStrict("camera {} sent nothing for {} frames after frame {}", 1 - camera, kPendingDepth, s.last_index);
       ring.pop();
       ++unpaired_;
     }

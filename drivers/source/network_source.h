@@ -45,6 +45,9 @@ bool isStreamUrl(const std::string& input);
 // from a dataset folder (`--realtime` paces it at its stamps instead).
 bool isRecordedStreamUrl(const std::string& url);
 
+// The file a recording's file:// URL names, as libavformat's file protocol opens it.
+std::filesystem::path recordedStreamFile(const std::string& url);
+
 // The file:// URL of `path` when it is a regular file that starts like an MPEG-TS (a sync byte
 // every 188 bytes), nullopt otherwise.
 std::optional<std::string> recordedStreamUrl(const std::filesystem::path& path);

@@ -247,10 +247,8 @@ VoRunResult runOnStream(const VoRunOptions& options, const std::string& url) {
   if (options.first_frame > 0 && !recording) {
     throw InputError(fmt::format("{}: --start-frame applies to recordings only (folders, recorded .ts files)", url));
   }
-  // libavformat's file protocol opens what follows "file:".
   const std::optional<std::filesystem::path> recording_file =
-      recording ? std::optional<std::filesystem::path>(std::filesystem::path(url.substr(5)).lexically_normal())
-                : std::nullopt;
+      recording ? std::optional<std::filesystem::path>(recordedStreamFile(url)) : std::nullopt;
   requireOutputsApartFromInputs(options, nullptr, options.calibration, recording_file);
   const StereoRig rig = loadCalibration(*options.calibration);
   if (rig.cameras.size() < 2) {
