@@ -1018,6 +1018,11 @@ TEST_CASE("backend: a corrupted frame triggers a reported reset; the trajectory 
   CHECK(out[100].state == TrackingState::kLost);
   CHECK(out[100].failure != FailureReason::kNone);
   CHECK(out[101].state == TrackingState::kReset);
+  // The lost frame's message names its failure; the reset after it says that tracking started
+  // again, where the failure field is kNone (it once read "reset (none)").
+  CHECK(untrackedCause(out[100]) == failureReasonName(out[100].failure));
+  CHECK(out[101].failure == FailureReason::kNone);
+  CHECK(untrackedCause(out[101]) == "started again after lost frames");
   CHECK(out[150].state == TrackingState::kLost);
   CHECK(lost == 4);    // 100, 150, 151, 152
   CHECK(resets == 2);  // 101 and 153

@@ -56,7 +56,7 @@ class ProgressSink final : public FrameSink {
     ++frames_;
     if (estimate_ && slot.pose.state != TrackingState::kTracking) {
       line_.message("frame {}: {} ({})", slot.frame.frame_index, trackingStateName(slot.pose.state),
-                    failureReasonName(slot.pose.failure));
+                    untrackedCause(slot.pose));
       hintAtFlowRetry(slot);
       hintAtStereoTolerance(slot);
     }

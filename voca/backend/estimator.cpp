@@ -55,6 +55,13 @@ std::string_view failureReasonName(FailureReason reason) {
   return "?";
 }
 
+std::string_view untrackedCause(const PoseEstimate& estimate) {
+  if (estimate.failure == FailureReason::kNone && estimate.state == TrackingState::kReset) {
+    return "started again after lost frames";
+  }
+  return failureReasonName(estimate.failure);
+}
+
 VoEstimator::VoEstimator(const BackendConfig& config, const StereoRig& rig)
     : config_(validated(config, rig)),
       model_(rig, config_.obs_std_dev_px, config_.obs_huber_thresh_px),

@@ -63,6 +63,11 @@ struct PoseEstimate {
   double time_ms = 0.0;
 };
 
+// Why a frame that was not tracked (state kReset or kLost) was not, for messages: its failure, or
+// for a reset that follows lost frames (their failure was reported with them) that tracking started
+// again there.
+std::string_view untrackedCause(const PoseEstimate& estimate);
+
 // Sliding-window estimator: the orchestrator of a Window of frames, a LandmarkStore, triangulation,
 // the WindowOptimizer and the MarginalizationPrior (voca/backend/*.h). Not thread-safe. All memory is allocated in the
 // constructor; process() does not allocate.
