@@ -173,6 +173,9 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
   if (options.use_dataset_fps) datasetFrameRate(dataset, settings.fps_num, settings.fps_den);
   report.fps_num = settings.fps_num;
   report.fps_den = settings.fps_den;
+  report.dataset_fps_num = settings.fps_num;
+  report.dataset_fps_den = settings.fps_den;
+  if (dataset.frames.size() >= 2) datasetFrameRate(dataset, report.dataset_fps_num, report.dataset_fps_den);
   {
     // Codec, rate and x264 options are checked on a small frame before any folder is created.
     VideoEncoder probe;

@@ -77,6 +77,11 @@ struct DecodingStopped {};
 
 std::string megabytes(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
 
+// 20 or 29.970: a frame rate as a person reads it.
+std::string fpsText(int num, int den) {
+  return den == 1 ? fmt::format("{}", num) : fmt::format("{:.3f}", static_cast<double>(num) / den);
+}
+
 int runEncode(const EncodeOptions& cli) {
   using namespace voca::encode;
   DatasetEncodeOptions options;
@@ -127,8 +132,8 @@ int runEncode(const EncodeOptions& cli) {
   }
   fmt::print("input      {} ({} layout), {} frames\n", cli.dataset, voca::layoutName(report.input_layout),
              report.num_frames);
-  fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {}/{} fps, {}{})\n", cli.out, cli.codec,
-             options.settings.bitrate_bps, report.fps_num, report.fps_den,
+  fmt::print("output     {}/mav0/cam*/data.mp4 ({}, {} bit/s target, {} fps, {}{})\n", cli.out, cli.codec,
+             options.settings.bitrate_bps, fpsText(report.fps_num, report.fps_den),
              options.settings.two_pass ? "two-pass" : "one-pass", options.settings.monochrome ? ", gray 4:0:0" : "");
   for (const CameraEncodeReport& cam : report.cameras) {
     const EncodeResult& r = cam.result;
@@ -140,6 +145,19 @@ int runEncode(const EncodeOptions& cli) {
                r.width, r.height, megabytes(cam.input_bytes), megabytes(r.file_bytes),
                static_cast<double>(cam.input_bytes) / static_cast<double>(r.file_bytes),
                r.achieved_bitrate_bps / 1000.0, r.num_keyframes, pass_times);
+  }
+  if (report.dataset_fps_num * report.fps_den != report.fps_num * report.dataset_fps_den) {
+    // The paper's convention (bits per frame = bitrate / 30) gives another bitrate over the dataset's
+    // real time, which is what a stream of these frames at their own rate would take.
+    std::string real_time;
+    for (const CameraEncodeReport& cam : report.cameras) {
+      real_time += fmt::format("{}cam{} {:.1f} kbit/s", real_time.empty() ? "" : ", ", cam.camera,
+                               cam.result.achieved_bitrate_bps * report.realTimeRateScale() / 1000.0);
+    }
+    fmt::print(
+        "real time  {} at the dataset's own {} fps (the videos are timed at {}; --fps dataset encodes at "
+        "the dataset's rate)\n",
+        real_time, fpsText(report.dataset_fps_num, report.dataset_fps_den), fpsText(report.fps_num, report.fps_den));
   }
   for (const CameraEncodeReport& cam : report.cameras) {
     const double deviation = cam.result.achieved_bitrate_bps / static_cast<double>(options.settings.bitrate_bps) - 1.0;
