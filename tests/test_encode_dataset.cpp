@@ -77,6 +77,7 @@ TEST_CASE("encodeDataset writes the VOCA video layout with the original timestam
   CHECK(report.dataset_fps_num == 20);
   CHECK(report.dataset_fps_den == 1);
   CHECK(report.realTimeRateScale() == doctest::Approx(20.0 / 30.0));
+  CHECK_FALSE(report.timedAtDatasetRate());
   CHECK(report.raw_bytes == 2 * 24 * 192 * 144);
   CHECK(report.output_bytes > 0);
   CHECK(report.input_bytes > report.output_bytes);
@@ -115,6 +116,7 @@ TEST_CASE("encodeDataset writes the VOCA video layout with the original timestam
   CHECK(second.fps_num == 20);
   CHECK(second.fps_den == 1);
   CHECK(second.realTimeRateScale() == 1.0);
+  CHECK(second.timedAtDatasetRate());
   REQUIRE(second.cameras.size() == 1);
   const test::VideoProbe probe = test::probeVideo(dir.path() / "video2" / "mav0" / "cam1" / "data.mp4");
   CHECK(probe.picture_types.size() == t.size());

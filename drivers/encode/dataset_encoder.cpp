@@ -170,12 +170,18 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
   requireFoldersApart({"the output folder", out}, {"the input dataset", dataset.root});
 
   EncoderSettings settings = options.settings;
-  if (options.use_dataset_fps) datasetFrameRate(dataset, settings.fps_num, settings.fps_den);
-  report.fps_num = settings.fps_num;
-  report.fps_den = settings.fps_den;
+  // A single frame has no rate of its own and takes the encoding's; --fps dataset needs two and says so.
   report.dataset_fps_num = settings.fps_num;
   report.dataset_fps_den = settings.fps_den;
-  if (dataset.frames.size() >= 2) datasetFrameRate(dataset, report.dataset_fps_num, report.dataset_fps_den);
+  if (options.use_dataset_fps || dataset.frames.size() >= 2) {
+    datasetFrameRate(dataset, report.dataset_fps_num, report.dataset_fps_den);
+  }
+  if (options.use_dataset_fps) {
+    settings.fps_num = report.dataset_fps_num;
+    settings.fps_den = report.dataset_fps_den;
+  }
+  report.fps_num = settings.fps_num;
+  report.fps_den = settings.fps_den;
   {
     // Codec, rate and x264 options are checked on a small frame before any folder is created.
     VideoEncoder probe;

@@ -42,6 +42,7 @@ struct DatasetEncodeReport {
   // at 30 fps whatever the dataset's rate, so a stream's bitrate over the dataset's real time is the
   // achieved one times realTimeRateScale().
   int dataset_fps_num = 0, dataset_fps_den = 1;
+  bool timedAtDatasetRate() const { return dataset_fps_num * fps_den == fps_num * dataset_fps_den; }
   double realTimeRateScale() const {
     return (static_cast<double>(dataset_fps_num) * fps_den) / (static_cast<double>(dataset_fps_den) * fps_num);
   }

@@ -146,7 +146,7 @@ int runEncode(const EncodeOptions& cli) {
                static_cast<double>(cam.input_bytes) / static_cast<double>(r.file_bytes),
                r.achieved_bitrate_bps / 1000.0, r.num_keyframes, pass_times);
   }
-  if (report.dataset_fps_num * report.fps_den != report.fps_num * report.dataset_fps_den) {
+  if (!report.timedAtDatasetRate()) {
     // The paper's convention (bits per frame = bitrate / 30) gives another bitrate over the dataset's
     // real time, which is what a stream of these frames at their own rate would take.
     std::string real_time;
