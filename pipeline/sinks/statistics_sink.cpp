@@ -71,6 +71,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
     f.distrusted += t.distrusted;
     f.prior_confirmed += t.prior_confirmed;
     f.flow_retried += t.flow_retried;
+    f.flow_searched += t.flow_searched;
   }
   f.detected += s.detected;
   f.detected_right_only += s.detected_right_only;

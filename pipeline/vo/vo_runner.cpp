@@ -610,6 +610,12 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
   if (appliesTo(config.retry_previous_flow, r.has_motion)) {
     fmt::print(out, "kept by the retry from the previous image flow (retry_previous_flow): {} ({:.2f} per frame)\n",
                t.flow_retried, static_cast<double>(t.flow_retried) / frames);
+    if (t.flow_searched > 0) {
+      fmt::print(out,
+                 "  retries with no flow measured yet (a start or reset in fast motion) started from the whole "
+                 "image's shift: {} camera steps\n",
+                 t.flow_searched);
+    }
   }
   fmt::print(out, "new points: {:.1f} per frame, {:.1f} % matched in the right image; epipolar rejections: {}\n",
              static_cast<double>(t.detected) / frames, pct(t.stereo_matched, t.detected), t.epipolar);
@@ -692,6 +698,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"distrusted_vectors", t.distrusted},
                    {"prior_tracks_confirmed", t.prior_confirmed},
                    {"flow_retried", t.flow_retried},
+                   {"flow_searched", t.flow_searched},
                    {"detected", t.detected},
                    {"detected_right_only", t.detected_right_only},
                    {"thinned", t.thinned},

@@ -23,6 +23,7 @@ TemporalStats& TemporalStats::operator+=(const TemporalStats& other) {
   lost += other.lost;
   rescued += other.rescued;
   flow_retried += other.flow_retried;
+  flow_searched += other.flow_searched;
   consensus_rejections += other.consensus_rejections;
   distrusted += other.distrusted;
   prior_confirmed += other.prior_confirmed;
@@ -115,6 +116,12 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.built_levels.assign(static_cast<std::size_t>(slot_count), 0);
     cam.resetSlots();
     cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes, config_.prior_reject_inconsistent);
+    int coarsest_width = max_width, coarsest_height = max_height;
+    for (int l = 1; l < num_levels_; ++l) {
+      coarsest_width = (coarsest_width + 1) / 2;
+      coarsest_height = (coarsest_height + 1) / 2;
+    }
+    cam.shift_search = ImageShiftSearch(coarsest_width, coarsest_height);
   }
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
   T_cam1_cam0_ = T_cam0_cam1.inverse();
@@ -228,6 +235,7 @@ void KltFrontend::reset() {
     cam.step.clear();
     cam.bridge.clear();
     cam.previous_flow.setZero();
+    cam.flow_known = false;
   }
   have_previous_ = false;
 }
@@ -338,7 +346,8 @@ void KltFrontend::trackPart(int camera, int part, std::size_t begin, std::size_t
   const bool whole_pyramid = cam.field_bridged || mode == PriorMode::kOfThenMv;
   const int prior_levels = whole_pyramid ? all_levels : prior_levels_;
   // retry_previous_flow: a flow under a pixel would start the retry where the plain track started.
-  const bool retry_flow = retry_flow_ && cam.previous_flow.squaredNorm() >= 1.f;
+  // An unknown flow is searched for once the frame is known (retryFromPreviousFlow).
+  const bool retry_flow = retry_flow_ && (!cam.flow_known || cam.previous_flow.squaredNorm() >= 1.f);
 
   for (std::size_t i = begin; i < end; ++i) {
     const Eigen::Vector2f p = cam.points[i];
@@ -464,7 +473,7 @@ void KltFrontend::trackPart(int camera, int part, std::size_t begin, std::size_t
       // The last resort of every mode (retry_previous_flow), decided once the whole frame is known:
       // the point keeps its templates until then. From the same start it would fail again.
       // It holds its place in the next frame's list, which keeps the ids in ascending order.
-      if (retry_flow && (!has_vector || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
+      if (retry_flow && (!has_vector || !cam.flow_known || (mv - cam.previous_flow).squaredNorm() >= 1.f)) {
         out.retry_candidates.push_back({out.ids.size(), out.traces.size() - 1, forward_slot});
         out.ids.push_back(cam.ids[i]);
         out.points.push_back(p);
@@ -510,6 +519,7 @@ void KltFrontend::endCamera(int camera, FrontendStats& stats) {
       return *mid;
     };
     cam.previous_flow = Eigen::Vector2f(median(step.flow_x), median(step.flow_y));
+    cam.flow_known = true;
   }
 }
 
@@ -535,9 +545,19 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam) {
   // frame's tracks. Retrying the few as well raised raw MH_03's ATE (retry_min_lost_fraction,
   // configs/README.md).
   const int lost_by_guesses = ts.previous - ts.kept;
-  const bool retry = static_cast<double>(lost_by_guesses) >= config_.retry_min_lost_fraction * ts.previous;
+  bool retry = static_cast<double>(lost_by_guesses) >= config_.retry_min_lost_fraction * ts.previous;
   const ImagePyramid& from = cam.prev();
   const ImagePyramid& to = cam.cur();
+  if (retry && !cam.flow_known) {
+    // No step has measured this camera's flow yet (the run, or tracking after a reset, started in
+    // fast motion): the whole image's shift stands in for it. The round trip still checks each track.
+    const int coarsest = num_levels_ - 1;
+    const std::optional<Eigen::Vector2f> shift =
+        cam.shift_search.estimate(from.level(coarsest), to.level(coarsest), static_cast<float>(1 << coarsest));
+    retry = shift && shift->squaredNorm() >= 1.f;
+    if (retry) cam.previous_flow = *shift;
+    ts.flow_searched = retry ? 1 : 0;
+  }
   bool any_lost = false;
   for (const RetryCandidate& candidate : step.retry_candidates) {
     PointTrace& trace = step.traces[candidate.trace];

@@ -15,6 +15,7 @@
 #include "voca/core/tracked_frame.h"
 #include "voca/frontend/detector.h"
 #include "voca/frontend/frontend_config.h"
+#include "voca/frontend/image_shift.h"
 #include "voca/frontend/patch.h"
 #include "voca/frontend/pyramid.h"
 #include "voca/motion/motion_field.h"
@@ -38,6 +39,9 @@ struct TemporalStats {
   int lost = 0;
   int rescued = 0;       // kept from the prior after the plain track was tried and failed
   int flow_retried = 0;  // kept from the previous frame's image flow after every other guess failed
+  // 1 when that retry started from the whole image's searched shift instead: no step had measured
+  // the camera's flow yet (ImageShiftSearch).
+  int flow_searched = 0;
   int consensus_rejections = 0;
   int distrusted = 0;       // vectors the codec-confidence checks rejected (counted in with_vector too)
   int prior_confirmed = 0;  // prior tracks not run: the vector landed near the plain track's result
@@ -173,8 +177,11 @@ class KltFrontend {
     int num_levels = 0;
     IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     // retry_previous_flow: the median displacement of the last temporal step's kept tracks (zero
-    // before any).
+    // before any), and whether a step has measured it since the start or the last reset. Until one
+    // has, a retry starts from the whole image's shift (shift_search) instead.
     Eigen::Vector2f previous_flow = Eigen::Vector2f::Zero();
+    bool flow_known = false;
+    ImageShiftSearch shift_search;
     // This frame's prior field (beginCamera) and whether it was bridged from an earlier P-frame.
     const MotionField* field = nullptr;
     bool field_bridged = false;
