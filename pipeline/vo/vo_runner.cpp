@@ -612,7 +612,7 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
                t.flow_retried, static_cast<double>(t.flow_retried) / frames);
     if (t.flow_searched > 0) {
       fmt::print(out,
-                 "  retries with no flow measured yet (a start or reset in fast motion) started from the whole "
+                 "  retries with no flow measured yet (the run started in fast motion) started from the whole "
                  "image's shift: {} camera steps\n",
                  t.flow_searched);
     }

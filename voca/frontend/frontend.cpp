@@ -549,7 +549,7 @@ bool KltFrontend::retryFromPreviousFlow(CameraState& cam) {
   const ImagePyramid& from = cam.prev();
   const ImagePyramid& to = cam.cur();
   if (retry && !cam.flow_known) {
-    // No step has measured this camera's flow yet (the run, or tracking after a reset, started in
+    // No step has measured this camera's flow yet (the run, or tracking after reset(), started in
     // fast motion): the whole image's shift stands in for it. The round trip still checks each track.
     const int coarsest = num_levels_ - 1;
     const std::optional<Eigen::Vector2f> shift =

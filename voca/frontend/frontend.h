@@ -177,7 +177,7 @@ class KltFrontend {
     int num_levels = 0;
     IFrameBridge bridge;  // chooses the motion prior, carrying P-frame vectors over I-frames
     // retry_previous_flow: the median displacement of the last temporal step's kept tracks (zero
-    // before any), and whether a step has measured it since the start or the last reset. Until one
+    // before any), and whether a step has measured it since the start or the last reset(). Until one
     // has, a retry starts from the whole image's shift (shift_search) instead.
     Eigen::Vector2f previous_flow = Eigen::Vector2f::Zero();
     bool flow_known = false;

@@ -148,7 +148,7 @@ struct FrontendConfig {
   // coarsest level; when the camera moves faster than that (a low frame rate, a fast turn) every
   // point is lost at once and the estimator has nothing to work with. Flow shorter than a pixel is
   // not retried (that track would start where the plain one did). Before any step has measured the
-  // flow (the first step of a run, the first after a reset) the retry starts from the whole image's
+  // flow (the first step of a run, or the first after KltFrontend::reset) the retry starts from the whole image's
   // shift, searched on the coarsest level (ImageShiftSearch). Not in Basalt or the paper.
   InputScope retry_previous_flow = InputScope::kOff;
   // The retry runs only in frames where the guesses lost at least this share of the previous frame's

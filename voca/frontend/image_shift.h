@@ -10,7 +10,7 @@ namespace voca {
 
 // The image motion of a whole camera between two frames as one translation, found by exhaustive
 // search: what the temporal retry starts from when no tracked step has measured the camera's flow
-// yet (the first step of a run, or the first after a reset). The search runs on the coarsest pyramid
+// yet (the first step of a run, or the first after KltFrontend::reset). The search runs on the coarsest pyramid
 // level, reduced further by box averaging to at most kSearchWidth columns, over shifts of up to a
 // quarter of the image each way, then refines on the coarsest level itself: it reaches far beyond
 // the pyramid's KLT basin, to within a coarsest-level pixel, which the retry's KLT then refines.
