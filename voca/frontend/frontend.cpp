@@ -116,12 +116,9 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
     cam.built_levels.assign(static_cast<std::size_t>(slot_count), 0);
     cam.resetSlots();
     cam.bridge = IFrameBridge(max_width, max_height, config_.bridge_iframes, config_.prior_reject_inconsistent);
-    int coarsest_width = max_width, coarsest_height = max_height;
-    for (int l = 1; l < num_levels_; ++l) {
-      coarsest_width = (coarsest_width + 1) / 2;
-      coarsest_height = (coarsest_height + 1) / 2;
-    }
-    cam.shift_search = ImageShiftSearch(coarsest_width, coarsest_height);
+    // The constructor sizes every level to the capacity: the largest coarsest level the search sees.
+    const FloatView coarsest = cam.pyramids[0].level(num_levels_ - 1);
+    cam.shift_search = ImageShiftSearch(coarsest.width, coarsest.height);
   }
   const SE3d T_cam0_cam1 = rig.T_cam0_cam1();
   T_cam1_cam0_ = T_cam0_cam1.inverse();
