@@ -624,6 +624,79 @@ TEST_CASE("frontend: detection_nonoverlap adds right-only tracks where the left 
   }
 }
 
+TEST_CASE("frontend: stereo_rematch finds a left track's lost right view again, at the true disparity") {
+  PlaneSequence seq{WaveTexture(3), Eigen::Vector2d(1.7, -0.8)};
+  const StereoRig rig = voca::test::pinholeRig(seq.kWidth, seq.kHeight, seq.kFocal, seq.kBaseline);
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kNone;
+  for (const bool rematch : {false, true}) {
+    CAPTURE(rematch);
+    config.stereo_rematch = rematch;
+    KltFrontend frontend(config, rig, {.max_points = 200});
+    TrackedStereoFrame frame;
+    FrontendStats stats;
+    // Frame 2's right image is flat in a band of columns: the right tracks there are lost, while
+    // their left tracks go on. Frame 3 shows the texture again.
+    std::set<std::uint64_t> paired_before, lost_right;  // paired in frame 1; of those, without a right view in 2
+    std::vector<int> paired_per_frame;
+    for (int k = 0; k < 5; ++k) {
+      seq.render(k);
+      if (k == 2) {
+        for (int y = 0; y < seq.kHeight; ++y)
+          for (int x = 80; x < 240; ++x) seq.right(x, y) = 128;
+      }
+      frontend.track(seq.input(k), frame, stats);
+      std::map<std::uint64_t, Eigen::Vector2f> left_by_id;
+      for (const auto& o : frame.observations[0]) left_by_id[o.track_id] = o.px;
+      int paired = 0;
+      std::uint64_t previous_id = 0;
+      std::set<std::uint64_t> right_ids;
+      for (const auto& o : frame.observations[1]) {
+        CHECK(o.track_id > previous_id);  // the right list stays in id order (filterEpipolar merges on it)
+        previous_id = o.track_id;
+        right_ids.insert(o.track_id);
+        const auto it = left_by_id.find(o.track_id);
+        if (it == left_by_id.end()) continue;
+        ++paired;
+        // Before the band, and the views found again after it, lie at the disparity. (Right tracks on
+        // the band's edge in frame 2 are pulled off by the flat pixels, with or without the key.)
+        if (k < 2 || (k > 2 && lost_right.count(o.track_id) != 0)) {
+          CHECK(std::abs(o.px.x() - (it->second.x() - seq.disparity)) < 0.1);
+          CHECK(std::abs(o.px.y() - it->second.y()) < 0.1);
+        }
+      }
+      paired_per_frame.push_back(paired);
+      if (k == 2) {
+        for (const auto& [id, px] : left_by_id)
+          if (right_ids.count(id) == 0 && paired_before.count(id) != 0) lost_right.insert(id);
+      }
+      if (k == 1) {
+        for (const std::uint64_t id : right_ids)
+          if (left_by_id.count(id) != 0) paired_before.insert(id);
+      }
+      if (k == 3) {
+        int found_again = 0;
+        for (const std::uint64_t id : lost_right) found_again += right_ids.count(id) != 0 ? 1 : 0;
+        if (rematch) {
+          CHECK(found_again >= static_cast<int>(lost_right.size()) * 9 / 10);
+          CHECK(stats.stereo_rematched >= found_again);
+        } else {
+          CHECK(found_again == 0);  // Basalt's rule: a track is matched left to right only when detected
+          CHECK(stats.stereo_rematched == 0);
+        }
+      }
+    }
+    // The band held about half the image's tracks.
+    CHECK(lost_right.size() >= static_cast<std::size_t>(paired_per_frame[1] / 3));
+    if (rematch) {
+      CHECK(paired_per_frame[3] >= paired_per_frame[1] * 9 / 10);
+      CHECK(paired_per_frame[4] >= paired_per_frame[1] * 9 / 10);
+    } else {
+      CHECK(paired_per_frame[4] < paired_per_frame[1] * 3 / 4);
+    }
+  }
+}
+
 TEST_CASE("frontend: codec priors bridge large motion; none loses it; I-frames bridged") {
   // 40 px/frame is beyond the 4-level pyramid's basin for a 15 px patch at this texture scale.
   PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(40.0, 12.0)};

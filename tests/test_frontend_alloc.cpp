@@ -32,8 +32,8 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     texture.render(fast_right[static_cast<std::size_t>(k)], w, h, shift - 16.5, shift / 3.0);
   }
   MotionField field(w, h);
-  // The five modes, then the paper's mode with the options of our own (presmooth) and of TUM-VI
-  // (right-only detection, on a 0.4 m baseline rig so that the right image has cells of its own).
+  // The five modes (none with stereo_rematch), then the paper's mode with the options of our own (presmooth) and of
+  // TUM-VI (right-only detection, on a 0.4 m baseline rig so that the right image has cells of its own).
   const StereoRig wide_rig = voca::test::pinholeRig(w, h, 300.0, 0.4);
   // Then a still scene with a small capacity: every track survives, the tracker is full each frame
   // and crowded tracks give way to new points (thin_when_full_px). Last, the speeding-up camera with
@@ -49,6 +49,7 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     config.detection_nonoverlap = run == 5;
     config.thin_when_full_px = run == 6 ? 50.0 : 0.0;
     config.retry_previous_flow = run == 7 ? InputScope::kAlways : InputScope::kOff;
+    config.stereo_rematch = run == 0;
     KltFrontend frontend(config, run == 5 ? wide_rig : rig, {.max_points = run == 6 ? 30 : 300});
     TrackedStereoFrame out;
     FrontendStats stats;
@@ -56,7 +57,7 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     in.reserve(w, h);
     long steady_allocations = 0, first_frame_allocations = 0;
     int detected_after_start = 0, tracked_after_start = 0, right_only_after_start = 0, thinned_after_start = 0,
-        retried_after_start = 0;
+        retried_after_start = 0, rematched_after_start = 0;
     for (int k = 0; k < num_frames; ++k) {
       const long before = voca::test::g_allocations.load();
       // Every third frame is an I-frame, so bridging copies run inside the window too.
@@ -83,11 +84,13 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
         detected_after_start += stats.detected;
         right_only_after_start += stats.detected_right_only;
         thinned_after_start += stats.thinned;
+        rematched_after_start += stats.stereo_rematched;
         retried_after_start += stats.temporal[0].flow_retried + stats.temporal[1].flow_retried;
         tracked_after_start += stats.temporal[0].kept + stats.temporal[1].kept;
       }
     }
-    INFO("mode " << priorModeName(mode) << (run == 5 ? " with presmooth and detection_nonoverlap" : "")
+    INFO("mode " << priorModeName(mode) << (run == 0 ? " with stereo_rematch" : "")
+                 << (run == 5 ? " with presmooth and detection_nonoverlap" : "")
                  << (run == 6 ? " with thin_when_full_px on a still scene" : "")
                  << (run == 7 ? " with retry_previous_flow, speeding up" : ""));
     CHECK(steady_allocations == 0);
@@ -98,6 +101,7 @@ TEST_CASE("frontend: no heap allocation in track() from the third frame on, in e
     CHECK(tracked_after_start > 100);
     if (run == 5) CHECK(right_only_after_start > 0);
     if (run == 6) CHECK(thinned_after_start > 0);
+    if (run == 0) CHECK(rematched_after_start > 0);
     if (run == 7) CHECK(retried_after_start > 100);
   }
 }

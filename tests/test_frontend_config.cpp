@@ -74,6 +74,11 @@ TEST_CASE("config: shipped EuRoC and TUM-VI configs carry the paper's frontend v
   CHECK(loadConfig(shippedConfig("euroc_vo.json")).frontend.stereo_max_recovered_dist2_px2 == 0.0);
   CHECK(loadConfig(shippedConfig("tumvi_vo.json")).frontend.stereo_max_recovered_dist2_px2 == 0.0);
   CHECK(FrontendConfig{}.thin_when_full_px == 0.0);  // Basalt keeps every track
+  // Ours, measured and off in every file (configs/README.md): Basalt matches left to right only at detection.
+  CHECK_FALSE(FrontendConfig{}.stereo_rematch);
+  for (const char* file : {"euroc_vo.json", "tumvi_vo.json", "kitti_vo.json"})
+    CHECK_FALSE(loadConfig(shippedConfig(file)).frontend.stereo_rematch);
+  CHECK(parseConfig(nlohmann::json::parse(R"({"frontend": {"stereo_rematch": true}})"), "x").frontend.stereo_rematch);
   // Ours, off by default (Basalt's behaviour), on raw frames in every file (configs/README.md).
   CHECK(FrontendConfig{}.retry_previous_flow == InputScope::kOff);
   CHECK(tumvi.frontend.retry_previous_flow == InputScope::kRawInput);

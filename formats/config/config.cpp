@@ -78,6 +78,7 @@ const FrontendField kFrontendFields[] = {
     {"prior_rescue_min_px", &FrontendConfig::prior_rescue_min_px},
     {"skip_coarse_outside", &FrontendConfig::skip_coarse_outside},
     {"detection_nonoverlap", &FrontendConfig::detection_nonoverlap},
+    {"stereo_rematch", &FrontendConfig::stereo_rematch},
     {"presmooth", ConfigReader<FrontendConfig>{&readInputScope<&FrontendConfig::presmooth>}},
 };
 

@@ -77,6 +77,7 @@ void StatisticsSink::consume(const FrameSlot& slot) {
   f.detected_right_only += s.detected_right_only;
   f.thinned += s.thinned;
   f.stereo_matched += s.stereo_matched;
+  f.stereo_rematched += s.stereo_rematched;
   f.epipolar += s.epipolar_rejected;
   f.bridged_frames += (s.bridged[0] || s.bridged[1]) ? 1 : 0;
   for (const float d : s.guess_dist_plain_px) f.guess_plain.record(d);

@@ -57,7 +57,8 @@ struct FrameRecord {
 struct FrontendTotals {
   std::int64_t previous = 0, kept = 0, rescued = 0, consensus = 0, tracked_plain = 0, tracked_prior = 0,
                with_vector = 0, distrusted = 0, prior_confirmed = 0, flow_retried = 0, flow_searched = 0;
-  std::int64_t detected = 0, detected_right_only = 0, stereo_matched = 0, epipolar = 0, thinned = 0;
+  std::int64_t detected = 0, detected_right_only = 0, stereo_matched = 0, stereo_rematched = 0, epipolar = 0,
+               thinned = 0;
   std::int64_t bridged_frames = 0;
   std::int64_t left_points = 0, right_points = 0;
   int min_left = 0, max_left = 0;

@@ -623,6 +623,10 @@ void printTrackSummary(const VoRunResult& r, const FrontendConfig& config, std::
     fmt::print(out, "right-only points (detection_nonoverlap): {:.1f} new per frame\n",
                static_cast<double>(t.detected_right_only) / frames);
   }
+  if (config.stereo_rematch) {
+    fmt::print(out, "left tracks found again in the right image (stereo_rematch): {:.1f} per frame\n",
+               static_cast<double>(t.stereo_rematched) / frames);
+  }
   if (config.thin_when_full_px > 0.0) {
     fmt::print(out, "tracks dropped next to an older one (thin_when_full_px {}): {:.1f} per frame\n",
                config.thin_when_full_px, static_cast<double>(t.thinned) / frames);
@@ -703,6 +707,7 @@ void writeStatisticsJson(const VoRunResult& r, const std::filesystem::path& file
                    {"detected_right_only", t.detected_right_only},
                    {"thinned", t.thinned},
                    {"stereo_matched", t.stereo_matched},
+                   {"stereo_rematched", t.stereo_rematched},
                    {"epipolar_rejections", t.epipolar},
                    {"bridged_frames", t.bridged_frames},
                    {"left_points", t.left_points},

@@ -33,7 +33,8 @@ TemporalStats& TemporalStats::operator+=(const TemporalStats& other) {
 void FrontendStats::clear() {
   temporal = {};
   bridged = {false, false};
-  detected = detected_right_only = stereo_matched = epipolar_rejected = thinned = num_left = num_right = 0;
+  detected = detected_right_only = stereo_matched = stereo_rematched = epipolar_rejected = thinned = num_left =
+      num_right = 0;
   guess_dist_plain_px.clear();
   guess_dist_prior_px.clear();
   time_ms = 0.0;
@@ -142,6 +143,9 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   detector_params_.safe_center = principalPoint(rig.cameras[0]);
   detector_ = GridDetector(max_width, max_height, config_.grid_size_px);
   new_points_.reserve(static_cast<std::size_t>(max_points_));
+  for (auto* v : {&rematch_ids_, &merged_ids_}) v->reserve(static_cast<std::size_t>(max_points_));
+  for (auto* v : {&rematch_points_, &merged_points_}) v->reserve(static_cast<std::size_t>(max_points_));
+  for (auto* v : {&rematch_slots_, &merged_slots_}) v->reserve(static_cast<std::size_t>(max_points_));
   right_detector_params_ = detector_params_;
   right_detector_params_.safe_center = principalPoint(rig.cameras[1]);
   if (config_.detection_nonoverlap) computeRightOverlap(rig);
@@ -623,6 +627,18 @@ void KltFrontend::thinTracks(FrontendStats& stats) {
   });
 }
 
+Eigen::Vector2f KltFrontend::stereoGuess(const Eigen::Vector2f& p) const {
+  const double depth =
+      config_.matching_guess == StereoGuess::kAverageDepth ? average_depth_m_ : config_.matching_default_depth_m;
+  Eigen::Vector3d bearing;
+  Eigen::Vector2d uv;
+  if (cameras_model_[0].unproject(p.cast<double>(), bearing) &&
+      cameras_model_[1].project(T_cam1_cam0_ * (bearing * depth), uv)) {
+    return uv.cast<float>();
+  }
+  return p;
+}
+
 void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats) {
   CameraState& left = cameras_[0];
   CameraState& right = cameras_[1];
@@ -630,20 +646,12 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
   const int room = max_points_ - static_cast<int>(left.points.size());
   if (room <= 0) return;
   stats.detected = detector_.detect(input.images[0].view(), left.points, detector_params_, room, new_points_);
-  const double depth =
-      config_.matching_guess == StereoGuess::kAverageDepth ? average_depth_m_ : config_.matching_default_depth_m;
   const int right_room = max_points_ - static_cast<int>(right.points.size());
   for (const Eigen::Vector2f& p : new_points_) {
     const std::uint64_t id = next_track_id_++;
     const int left_slot = left.addDetected(id, p, *pattern_);
     if (stats.stereo_matched >= right_room) continue;
-    Eigen::Vector2f guess = p;
-    Eigen::Vector3d bearing;
-    Eigen::Vector2d uv;
-    if (cameras_model_[0].unproject(p.cast<double>(), bearing) &&
-        cameras_model_[1].project(T_cam1_cam0_ * (bearing * depth), uv)) {
-      guess = uv.cast<float>();
-    }
+    const Eigen::Vector2f guess = stereoGuess(p);
     Eigen::Vector2f matched;
     const int right_slot = right.acquire();
     if (trackChecked(left.slot(left_slot), left.cur(), right.cur(), p, guess - p, num_levels_, stereo_round_trip2_,
@@ -656,6 +664,60 @@ void KltFrontend::detectAndMatch(const DecodedStereoFrame& input, FrontendStats&
       right.release(right_slot);
     }
   }
+}
+
+void KltFrontend::rematchStereo(FrontendStats& stats) {
+  CameraState& left = cameras_[0];
+  CameraState& right = cameras_[1];
+  rematch_ids_.clear();
+  rematch_points_.clear();
+  rematch_slots_.clear();
+  int room = max_points_ - static_cast<int>(right.points.size());
+  // Both id lists ascend: one pass finds the left tracks without a right view.
+  std::size_t r = 0;
+  for (std::size_t l = 0; l < left.ids.size() && room > 0; ++l) {
+    const std::uint64_t id = left.ids[l];
+    while (r < right.ids.size() && right.ids[r] < id) ++r;
+    if (r < right.ids.size() && right.ids[r] == id) continue;
+    const Eigen::Vector2f& p = left.points[l];
+    const Eigen::Vector2f guess = stereoGuess(p);
+    Eigen::Vector2f matched;
+    const int right_slot = right.acquire();
+    // The left slot holds the point's templates in the current image (its backward track built them).
+    if (trackChecked(left.trackedTemplates(left.slots[l], left.cur(), p, num_levels_, *pattern_), left.cur(),
+                     right.cur(), p, guess - p, num_levels_, stereo_round_trip2_, right, right_slot, matched)) {
+      rematch_ids_.push_back(id);
+      rematch_points_.push_back(matched);
+      rematch_slots_.push_back(right_slot);
+      --room;
+    } else {
+      right.release(right_slot);
+    }
+  }
+  stats.stereo_rematched = static_cast<int>(rematch_ids_.size());
+  if (rematch_ids_.empty()) return;
+  merged_ids_.clear();
+  merged_points_.clear();
+  merged_slots_.clear();
+  std::size_t a = 0, b = 0;
+  while (a < right.ids.size() || b < rematch_ids_.size()) {
+    const bool take_right = b == rematch_ids_.size() || (a < right.ids.size() && right.ids[a] < rematch_ids_[b]);
+    if (take_right) {
+      merged_ids_.push_back(right.ids[a]);
+      merged_points_.push_back(right.points[a]);
+      merged_slots_.push_back(right.slots[a]);
+      ++a;
+    } else {
+      merged_ids_.push_back(rematch_ids_[b]);
+      merged_points_.push_back(rematch_points_[b]);
+      merged_slots_.push_back(rematch_slots_[b]);
+      ++b;
+    }
+  }
+  // Swapping keeps both sets of buffers at their reserved capacity: nothing is allocated.
+  right.ids.swap(merged_ids_);
+  right.points.swap(merged_points_);
+  right.slots.swap(merged_slots_);
 }
 
 void KltFrontend::detectRightOnly(const DecodedStereoFrame& input, FrontendStats& stats) {
@@ -748,6 +810,7 @@ void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& 
   // way (thin_when_full_px).
   if (have_previous_ && config_.thin_when_full_px > 0.0 && static_cast<int>(cameras_[0].points.size()) >= max_points_)
     thinTracks(stats);
+  if (have_previous_ && config_.stereo_rematch) rematchStereo(stats);
   detectAndMatch(input, stats);
   if (config_.detection_nonoverlap) detectRightOnly(input, stats);
   filterEpipolar(stats);

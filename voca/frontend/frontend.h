@@ -58,6 +58,7 @@ struct FrontendStats {
   int detected = 0;                           // new left points
   int detected_right_only = 0;                // new right points where the left camera does not see
   int stereo_matched = 0;                     // of the new points, found in the right image
+  int stereo_rematched = 0;                   // left tracks without a right view found there again (stereo_rematch)
   int epipolar_rejected = 0;                  // right observations dropped by the epipolar check
   int thinned = 0;                            // left tracks dropped next to an older one (thin_when_full_px)
   int num_left = 0, num_right = 0;            // observations output
@@ -275,6 +276,10 @@ class KltFrontend {
   // The codec-confidence checks of the config's prior_* keys on the vector found at p.
   bool trustVector(const MotionBlock& block, const CameraState& cam, const Eigen::Vector2f& p) const;
   void detectAndMatch(const DecodedStereoFrame& input, FrontendStats& stats);
+  // Where the left point p is first looked for in the right image (the config's matching_guess).
+  Eigen::Vector2f stereoGuess(const Eigen::Vector2f& p) const;
+  // stereo_rematch: matches the left tracks that have no right view to the right image again.
+  void rematchStereo(FrontendStats& stats);
   void detectRightOnly(const DecodedStereoFrame& input, FrontendStats& stats);
   // Right-image grid cells that the left camera sees (blocked for right-only detection).
   void computeRightOverlap(const StereoRig& rig);
@@ -306,6 +311,10 @@ class KltFrontend {
   int thin_cols_ = 0, thin_rows_ = 0;
   float thin_cell_px_ = 0.f;
   std::vector<std::uint64_t> thinned_ids_;
+  // rematchStereo: the tracks found again, then the right camera's lists merged with them in id order.
+  std::vector<std::uint64_t> rematch_ids_, merged_ids_;
+  std::vector<Eigen::Vector2f> rematch_points_, merged_points_;
+  std::vector<int> rematch_slots_, merged_slots_;
   std::array<CameraState, 2> cameras_;
   std::uint64_t next_track_id_ = 1;
   bool have_previous_ = false;

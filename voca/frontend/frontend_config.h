@@ -142,6 +142,10 @@ struct FrontendConfig {
   // texture: near-duplicates that weigh one error twice, age without end and keep every fresh point
   // out. Basalt has no capacity, so it never gets here; 0 = never drop.
   double thin_when_full_px = 0.0;
+  // A left track whose right partner was lost (or never found when it was detected) is matched to the
+  // right image again in every frame, as a new point is. Basalt matches a track left to right only
+  // when it is detected, so a track whose right view is lost once stays monocular for life.
+  bool stereo_rematch = false;
   // A point every guess lost (the previous position, and the motion vector where the mode has one)
   // gets one more track, started where the camera's image flow of the previous frame would put it:
   // the median displacement of that frame's kept tracks. Plain KLT reaches only as far as its
