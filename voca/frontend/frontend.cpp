@@ -143,9 +143,11 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   detector_params_.safe_center = principalPoint(rig.cameras[0]);
   detector_ = GridDetector(max_width, max_height, config_.grid_size_px);
   new_points_.reserve(static_cast<std::size_t>(max_points_));
-  for (auto* v : {&rematch_ids_, &merged_ids_}) v->reserve(static_cast<std::size_t>(max_points_));
-  for (auto* v : {&rematch_points_, &merged_points_}) v->reserve(static_cast<std::size_t>(max_points_));
-  for (auto* v : {&rematch_slots_, &merged_slots_}) v->reserve(static_cast<std::size_t>(max_points_));
+  if (config_.stereo_rematch) {
+    for (auto* v : {&rematch_ids_, &merged_ids_}) v->reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&rematch_points_, &merged_points_}) v->reserve(static_cast<std::size_t>(max_points_));
+    for (auto* v : {&rematch_slots_, &merged_slots_}) v->reserve(static_cast<std::size_t>(max_points_));
+  }
   right_detector_params_ = detector_params_;
   right_detector_params_.safe_center = principalPoint(rig.cameras[1]);
   if (config_.detection_nonoverlap) computeRightOverlap(rig);
