@@ -4,7 +4,8 @@ voca_add_test(test_encode SOURCES test_encode.cpp LIBS voca_drivers_encode PkgCo
 voca_add_test(test_encode_dataset SOURCES test_encode_dataset.cpp
               LIBS voca_drivers_encode_dataset PkgConfig::FFMPEG TIMEOUT 120)
 voca_add_test(test_encode_bad_input SOURCES test_encode_bad_input.cpp
-              LIBS voca_drivers_encode_dataset voca_formats_image PkgConfig::FFMPEG LABELS asan TIMEOUT 120)
+              LIBS voca_drivers_encode_dataset voca_formats_image voca_formats_calib voca_synth PkgConfig::FFMPEG
+              LABELS asan TIMEOUT 120)
 voca_add_test(test_encode_e2e SOURCES test_encode_e2e.cpp
               LIBS voca_drivers_encode_dataset voca_formats_calib voca_formats_trajectory PkgConfig::FFMPEG LABELS e2e TIMEOUT 600)
 # The live encoder: selection with injected probes, low-latency libx264 (one packet per frame).

@@ -349,6 +349,26 @@ TEST_CASE("an output that is an input file, in the dataset's data folder, or ano
   refused("eval --gt " + ground_truth.string() + " --est " + (video / "trajectory.txt").string() + " --json " +
               (video / "trajectory.txt").string(),
           "--json " + (video / "trajectory.txt").string() + " is --est");
+  refused("eval --gt " + ground_truth.string() + " --est " + (video / "trajectory.txt").string() + " --json " +
+              (dir / "no-such-folder" / "r.json").string(),
+          "cannot write --json " + (dir / "no-such-folder" / "r.json").string() + ": the folder");
+
+  // voca stream to a file: before, `stream raw raw/mav0/cam0/data.csv` replaced the frame list with the stream.
+  const fs::path frame_list = raw / "mav0" / "cam0" / "data.csv";
+  const auto frame_list_size = fs::file_size(frame_list);
+  refused("stream " + raw.string() + " " + frame_list.string() + " --frames 2",
+          "the output file " + frame_list.string() + " lies in the dataset's mav0 folder");
+  refused("stream " + raw.string() + " file://" + fs::absolute(raw / "calib.json").string() + " --frames 2",
+          "is the dataset's calibration");
+  refused("stream " + raw.string() + " " + (dir / "no-such-folder" / "s.ts").string() + " --frames 2",
+          "cannot write the output file " + (dir / "no-such-folder" / "s.ts").string() + ": the folder");
+  CHECK(fs::file_size(frame_list) == frame_list_size);
+  // voca mv: its pictures among the dataset's files, or its folder on the video it draws.
+  refused("mv " + video.string() + " --out " + (video / "mav0" / "cam0").string() + " --frames 0:1",
+          "the output folder " + (video / "mav0" / "cam0").string() + " lies in the dataset's mav0 folder");
+  refused("mv " + left_video.string() + " --out " + left_video.string() + " --frames 0:1", "is the video");
+  CHECK_FALSE(fs::exists(video / "mav0" / "cam0" / "mv_000000.png"));
+  CHECK(fs::file_size(left_video) == video_size);
 }
 
 TEST_CASE("pacing and waiting bounds: NaN, infinite and negative values are refused by name") {

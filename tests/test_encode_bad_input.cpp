@@ -6,11 +6,13 @@
 
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
+#include "voca/synth/rigs.h"
 
 using namespace voca;
 using namespace voca::encode;
@@ -176,6 +178,13 @@ TEST_CASE("dataset problems are InputErrors naming the folder") {
   calib.calibration = dir / "nope.json";
   CHECK(contains(inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-calib", calib); }), "nope.json"));
   CHECK(!std::filesystem::exists(dir / "out-calib" / "mav0" / "cam0" / "data.mp4"));
+  // A calibration for another image size fails before any encoding too: `voca run` refused the folder.
+  saveBasaltCalibration(synth::eurocRig(), dir / "calib-752x480.json");
+  calib.calibration = dir / "calib-752x480.json";
+  const std::string other_size = inputErrorOf([&] { encodeDataset(dir / "raw", dir / "out-calib-size", calib); });
+  CHECK(contains(other_size, "calib-752x480.json: camera 0 is calibrated for 752x480 images, but "));
+  CHECK(contains(other_size, "is 64x48"));
+  CHECK(!std::filesystem::exists(dir / "out-calib-size"));
 
   // A corrupt PNG is reported with its file name and frame, and the folder the run made is gone.
   const Dataset raw = openDataset(dir / "raw");

@@ -98,6 +98,17 @@ TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4"
   // Bad input: a folder that is not a video dataset, and a camera that does not exist.
   CHECK(runVoca("mv " + raw.string() + " --out " + (dir / "bad1").string()) != 0);
   CHECK(runVoca("mv " + video.string() + " --out " + (dir / "bad2").string() + " --camera 2") != 0);
+  // Values that changed the drawing silently (a negative radius flagged more vectors) are refused by name.
+  for (const std::string option : {"--outlier-radius -5", "--outlier-radius 0", "--outlier-threshold -1",
+                                   "--outlier-relative -0.5", "--arrow-scale 0", "--arrow-scale -1"}) {
+    const voca::test::CommandOutput bad =
+        voca::test::runVocaOutput("mv " + video.string() + " --out " + (dir / "bad3").string() + " " + option);
+    INFO(option);
+    INFO(bad.text);
+    CHECK(bad.exit_code == 1);
+    CHECK(bad.text.find(option + ": expected") != std::string::npos);
+  }
+  CHECK_FALSE(fs::exists(dir / "bad3"));
 }
 
 TEST_CASE("RgbVideoWriter opens its file at once; without a frame it leaves none behind") {

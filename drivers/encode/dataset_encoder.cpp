@@ -190,10 +190,28 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
 
   // Load the calibration before the long encoding so that a bad file fails early.
   std::optional<StereoRig> rig;
-  if (options.calibration) {
-    rig = loadCalibration(*options.calibration);
-  } else if (dataset.calibration) {
-    rig = loadCalibration(*dataset.calibration);
+  const std::optional<fs::path> calibration_file = options.calibration ? options.calibration : dataset.calibration;
+  if (calibration_file) rig = loadCalibration(*calibration_file);
+  // Its image size too: the folder written with another size is one that `voca run` refuses.
+  if (rig && dataset.layout != DatasetLayout::kVocaVideo && !dataset.frames.empty()) {
+    GrayImage first;
+    for (int camera : options.cameras) {
+      if (camera >= static_cast<int>(rig->cameras.size())) continue;
+      const fs::path& file = camera == 0 ? dataset.frames.front().left : dataset.frames.front().right;
+      try {
+        readPngGray(file, first);
+      } catch (const InputError&) {
+        continue;  // the encoding names the unreadable frame, with what to do about it
+      }
+      const CameraCalibration& calib = rig->cameras[static_cast<std::size_t>(camera)];
+      if (calib.width != first.width() || calib.height != first.height()) {
+        throw InputError(
+            fmt::format("{}: camera {} is calibrated for {}x{} images, but {} is {}x{}; pass the "
+                        "calibration of these cameras with --calib",
+                        calibration_file->string(), camera, calib.width, calib.height, file.string(), first.width(),
+                        first.height()));
+      }
+    }
   }
 
   try {

@@ -291,6 +291,20 @@ Dataset openDataset(const fs::path& path) {
   return dataset;
 }
 
+std::vector<NamedPath> datasetReadPaths(const Dataset& dataset) {
+  std::vector<NamedPath> paths;
+  const std::filesystem::path& root = dataset.root;
+  if (dataset.layout == DatasetLayout::kKitti) {
+    for (const char* part : {"image_0", "image_1", "times.txt", "calib.txt"}) {
+      paths.push_back({"the dataset's " + std::string(part), root / part});
+    }
+  } else {
+    paths.push_back({"the dataset's mav0 folder", root.filename() == "mav0" ? root : root / "mav0"});
+  }
+  if (dataset.ground_truth) paths.push_back({"the ground truth", *dataset.ground_truth});
+  return paths;
+}
+
 std::optional<Trajectory> loadGroundTruth(const Dataset& dataset, const std::optional<std::filesystem::path>& file) {
   const std::optional<std::filesystem::path>& path = file ? file : dataset.ground_truth;
   if (!path) return std::nullopt;

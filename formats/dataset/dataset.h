@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "platform/filesystem/output_paths.h"
 #include "voca/core/image.h"
 #include "voca/trajectory/trajectory.h"
 
@@ -51,6 +52,12 @@ struct Dataset {
 // Throws InputError for a missing folder, an unknown layout (saying what was looked for) or a
 // malformed csv/times line (file:line).
 Dataset openDataset(const std::filesystem::path& path);
+
+// What a command reads of this dataset, named for messages ("the dataset's mav0 folder"): the image or
+// video folders (EuRoC and VOCA video: the whole mav0 folder; KITTI: image_0, image_1, times.txt,
+// calib.txt) and its ground truth. No output of a command that reads the dataset may be one of them or
+// lie in one (requireOutputsApart): `-o mav0/cam0/data.mp4` would truncate the video being decoded.
+std::vector<NamedPath> datasetReadPaths(const Dataset& dataset);
 
 // The ground truth of a run on this dataset: `file` when given, else the dataset's own (nullopt when
 // it has none). A KITTI poses file carries no timestamps, so on a KITTI sequence it takes the

@@ -14,13 +14,32 @@
 #include "drivers/network/frame_stamp.h"
 #include "drivers/network/ts_writer.h"
 #include "drivers/source/dataset_source.h"
+#include "drivers/source/network_source.h"
 #include "formats/dataset/dataset.h"
+#include "platform/filesystem/output_paths.h"
 #include "platform/realtime/clock.h"
 #include "platform/realtime/stop_signal.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
 
 namespace voca::pipeline {
+
+namespace {
+
+// A URL that names a file (out.ts, file:///tmp/out.ts) is an output like `voca run -o`: it must not be
+// a file of the dataset being sent or lie in its folders (`voca stream seq seq/mav0/cam0/data.csv`
+// replaced the frame list with the stream), and its folder must exist, before anything is encoded.
+void requireOutputFileApart(const std::string& url, const Dataset& dataset) {
+  if (isStreamUrl(url) && !isRecordedStreamUrl(url)) return;  // udp://, tcp://, ...: nothing on disk
+  const NamedPath output{"the output file",
+                         isRecordedStreamUrl(url) ? recordedStreamFile(url) : std::filesystem::path(url)};
+  std::vector<NamedPath> inputs = datasetReadPaths(dataset);
+  if (dataset.calibration) inputs.push_back({"the dataset's calibration", *dataset.calibration});
+  requireOutputsApart(std::span(&output, 1), inputs);
+  requireWritableFile(output);
+}
+
+}  // namespace
 
 StreamResult runStream(const StreamOptions& options) {
   if (!(options.speed > 0.0))
@@ -34,6 +53,7 @@ StreamResult runStream(const StreamOptions& options) {
                     "(image folders) live, as a camera would",
                     options.input.string()));
   }
+  requireOutputFileApart(options.url, dataset);
   ReplayOptions replay;
   replay.max_frames = options.max_frames;
   std::unique_ptr<StereoSource> source = openDatasetSource(dataset, replay);

@@ -188,17 +188,7 @@ void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* d
                                             NamedPath{"the trace file", options.pipeline.trace_path},
                                             NamedPath{"the overlay video", options.overlay_file}};
   std::vector<NamedPath> inputs;
-  if (dataset != nullptr) {
-    const std::filesystem::path& root = dataset->root;
-    if (dataset->layout == DatasetLayout::kKitti) {
-      for (const char* part : {"image_0", "image_1", "times.txt", "calib.txt"}) {
-        inputs.push_back({"the dataset's " + std::string(part), root / part});
-      }
-    } else {
-      inputs.push_back({"the dataset's mav0 folder", root.filename() == "mav0" ? root : root / "mav0"});
-    }
-    if (dataset->ground_truth) inputs.push_back({"the ground truth", *dataset->ground_truth});
-  }
+  if (dataset != nullptr) inputs = datasetReadPaths(*dataset);
   if (recording) inputs.push_back({"the recorded stream", *recording});
   if (options.ground_truth) inputs.push_back({"the ground truth", *options.ground_truth});
   if (calibration) inputs.push_back({"the calibration", *calibration});

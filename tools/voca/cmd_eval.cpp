@@ -137,6 +137,7 @@ int runEval(const EvalCommandOptions& cli) {
                                     {"--est-times", cli.est_times},
                                     {"--calib", cli.calib_path}};
   voca::requireOutputsApart({&report_file, 1}, inputs);
+  voca::requireWritableFile(report_file);  // before the evaluation, not after its report is printed
   LoadedTrajectory gt = loadInput(cli.gt_path, cli.gt_format, cli.gt_times, cli.gt_frame);
   LoadedTrajectory est = loadInput(cli.est_path, cli.est_format, cli.est_times, cli.est_frame);
   matchFrames(est, gt, cli.calib_path);
@@ -163,7 +164,7 @@ int runEval(const EvalCommandOptions& cli) {
     std::ofstream out(cli.json_path);
     out << j.dump(2) << '\n';
     out.close();  // a full disk shows only when the buffer is written out
-    if (!out) throw voca::InputError(fmt::format("cannot write {}", cli.json_path));
+    if (!out) throw voca::InputError(fmt::format("cannot write {}: {}", cli.json_path, std::strerror(errno)));
   }
   return 0;
 }

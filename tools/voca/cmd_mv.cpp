@@ -9,6 +9,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include <fmt/core.h>
@@ -18,6 +19,7 @@
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "pipeline/sinks/overlay_sink.h"
+#include "platform/filesystem/output_paths.h"
 #include "platform/realtime/stop_signal.h"
 #include "platform/terminal/progress_line.h"
 #include "tools/voca/command.h"
@@ -81,22 +83,41 @@ int runMv(const MvOptions& opts) {
   if (opts.camera < 0 || opts.camera > 1) {
     throw voca::InputError("--camera " + std::to_string(opts.camera) + ": expected 0 or 1");
   }
+  // A negative radius or threshold flagged more vectors instead of failing; a scale of 0 or less hides
+  // or flips the arrows.
+  const auto require_nonnegative = [](const char* name, double value) {
+    if (!(value >= 0.0)) throw voca::InputError(fmt::format("{} {}: expected 0 or more", name, value));
+  };
+  if (!(opts.arrow_scale > 0.0)) {
+    throw voca::InputError(fmt::format("--arrow-scale {}: expected a positive factor", opts.arrow_scale));
+  }
+  if (opts.outliers.radius_px <= 0) {
+    throw voca::InputError(
+        fmt::format("--outlier-radius {}: expected a positive radius (px)", opts.outliers.radius_px));
+  }
+  require_nonnegative("--outlier-threshold", opts.outliers.abs_threshold_px);
+  require_nonnegative("--outlier-relative", opts.outliers.rel_threshold);
   const FrameRange range = parseFrameRange(opts.frames);
   DecoderOptions decoder_options;
   decoder_options.kind = parseDecoderKind(opts.decoder);
   decoder_options.strict = opts.strict;
 
   std::unique_ptr<VideoReader> reader;
+  const voca::NamedPath output{"the output folder", opts.out};
   if (fs::is_directory(opts.input)) {
     const voca::Dataset dataset = voca::openDataset(opts.input);
     if (dataset.layout != voca::DatasetLayout::kVocaVideo) {
       throw voca::InputError(opts.input + ": a " + std::string(voca::layoutName(dataset.layout)) +
                              " image dataset, not a video; expected mav0/camN/data.mp4 or a video file");
     }
+    // The pictures would land among the dataset's files (mav0/cam0/mv_000000.png).
+    voca::requireOutputsApart(std::span(&output, 1), voca::datasetReadPaths(dataset));
     for (const std::string& warning : dataset.warnings) fmt::print(stderr, "warning: {}\n", warning);
     reader = std::make_unique<VideoReader>(opts.camera == 0 ? dataset.video_left : dataset.video_right,
                                            datasetTimestamps(dataset), decoder_options);
   } else {
+    const voca::NamedPath video{"the video", opts.input};
+    voca::requireOutputsApart(std::span(&output, 1), std::span(&video, 1));
     reader = std::make_unique<VideoReader>(opts.input, std::vector<std::int64_t>{}, decoder_options);
   }
 
