@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -386,6 +387,39 @@ TEST_CASE("pacing and waiting bounds: NaN, infinite and negative values are refu
     CHECK(result.exit_code == 1);
     CHECK(result.text.find("expected seconds above 0 and at most 86400") != std::string::npos);
   }
+}
+
+TEST_CASE("number options say what they expect: no 309-digit bound, text that is no number named as such") {
+  voca::test::ScratchDir dir("cli-numbers");
+  const fs::path trajectory = dir / "t.txt";
+  {
+    std::ofstream file(trajectory);
+    for (int i = 0; i < 20; ++i) file << 0.05 * i << ' ' << 0.1 * i << " 0 0 0 0 0 1\n";
+  }
+  const std::string eval = "eval --gt " + trajectory.string() + " --est " + trajectory.string();
+  const std::pair<std::string, std::string> cases[] = {
+      {eval + " --ate-divergence 0", "--ate-divergence: expected a number above 0, got 0"},
+      {eval + " --rte-divergence -1", "--rte-divergence: expected a number above 0, got -1"},
+      {eval + " --expected-frames 0", "--expected-frames: expected a number above 0, got 0"},
+      {eval + " --max-diff -1", "--max-diff: expected a number of 0 or more, got -1"},
+      {eval + " --max-diff abc", "--max-diff: expected a number, got 'abc'"},
+      {eval + " --max-diff nan", "--max-diff: expected a number, got 'nan'"},
+      {"bench backend --warmup -1", "--warmup: expected a number of 0 or more, got -1"},
+      {"bench backend --synthetic --motion 0", "--motion: expected a number above 0, got 0"},
+      {"bench backend --synthetic --noise -1", "--noise: expected a number of 0 or more, got -1"},
+      {"bench frontend --frames -1", "--frames: expected a number of 0 or more, got -1"},
+      {"bench pipeline --frames -1", "--frames: expected a number of 0 or more, got -1"},
+  };
+  for (const auto& [args, message] : cases) {
+    const voca::test::CommandOutput result = runVocaOutput(args);
+    INFO(args);
+    INFO(result.text);
+    CHECK(result.exit_code == 2);  // the command line does not parse: nothing ran
+    CHECK(result.text.find(message) != std::string::npos);
+    CHECK(result.text.find("17976931348623157") == std::string::npos);
+  }
+  // The bounds themselves pass.
+  CHECK(runVocaOutput(eval + " --max-diff 0 --expected-frames 2").exit_code == 0);
 }
 
 TEST_CASE("voca demo checks its options before making its folder, and a stop removes a shortened rendering") {

@@ -15,6 +15,7 @@
 #include "pipeline/harness/bench_sequence.h"
 #include "platform/machine/cpu_info.h"
 #include "platform/realtime/stop_signal.h"
+#include "tools/voca/number_checks.h"
 #include "voca/backend/estimator.h"
 #include "voca/backend/synthetic.h"
 #include "voca/core/error.h"
@@ -131,11 +132,13 @@ Runner configureBackendBench(CLI::App& app) {
   app.add_option("--config", opts->config,
                  "Config JSON file or shipped name: euroc, tumvi, kitti (default: the sequence's own, else euroc)");
   app.add_option("--mode", opts->mode, "Prior mode of the frontend run that records the tracks")->capture_default_str();
-  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")
+      ->capture_default_str()
+      ->check(nonNegativeNumber());
   app.add_option("--warmup", opts->warmup,
                  "Frames run but not timed first: the window filling up to its number of keyframes")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeNumber());
   app.add_option("--repeat", opts->repeat,
                  "Times the estimator is run over the same observations; each frame's time is the median of its "
                  "runs (the same work each time: what a busy machine adds to one run drops out)")
@@ -146,9 +149,12 @@ Runner configureBackendBench(CLI::App& app) {
   app.add_option("--seconds", opts->seconds, "--synthetic: length of the sequence (20 fps)")->capture_default_str();
   app.add_option("--points", opts->points, "--synthetic: tracked points per frame (left camera)")
       ->capture_default_str();
-  app.add_option("--noise", opts->noise_px, "--synthetic: observation noise, px (Gaussian)")->capture_default_str();
+  app.add_option("--noise", opts->noise_px, "--synthetic: observation noise, px (Gaussian)")
+      ->capture_default_str()
+      ->check(nonNegativeNumber());
   app.add_option("--motion", opts->motion, "--synthetic: motion speed factor (1 = gentle handheld)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(positiveNumber());
   app.add_option("--keyframes", opts->keyframes, "--synthetic: keyframes in the window (max_keyframes)")
       ->capture_default_str();
   app.add_option("--rig", opts->rig, "--synthetic: built-in stereo rig, euroc or tumvi")->capture_default_str();

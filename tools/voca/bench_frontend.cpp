@@ -2,6 +2,7 @@
 
 #include "tools/voca/bench_frontend.h"
 
+#include "tools/voca/number_checks.h"
 #include "tools/voca/pipeline_cli.h"
 
 #include <fmt/core.h>
@@ -139,7 +140,9 @@ Runner configureFrontendBench(CLI::App& app) {
                  "input: the --synth camera's)");
   app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first to get motion vectors")
       ->capture_default_str();
-  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")
+      ->capture_default_str()
+      ->check(nonNegativeNumber());
   app.add_option("--repeat", opts->repeat,
                  "Runs over the sequence per mode; each frame's time is the median of its runs")
       ->capture_default_str()

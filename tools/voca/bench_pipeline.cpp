@@ -18,6 +18,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "platform/realtime/thread_control.h"
 #include "platform/terminal/progress_line.h"
+#include "tools/voca/number_checks.h"
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
@@ -154,7 +155,9 @@ Runner configurePipelineBench(CLI::App& app) {
   app.add_option("--mode", opts->mode, "Prior mode: " + priorModeList() + " (default: the config's)");
   app.add_option("--bitrate", opts->bitrate, "Raw datasets are encoded at this rate first")->capture_default_str();
   app.add_option("--repeat", opts->repeat, "Offline runs per thread layout")->capture_default_str();
-  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  app.add_option("--frames", opts->frames, "Use only the first N frames (0 = all)")
+      ->capture_default_str()
+      ->check(nonNegativeNumber());
   app.add_flag("--no-realtime", opts->skip_realtime, "Skip the real-rate latency run");
   app.add_option("--decoder", opts->decoder, "Decoder: auto, software, vaapi or v4l2m2m")->capture_default_str();
   app.footer(

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -13,6 +15,7 @@
 #include "formats/trajectory/trajectory_io.h"
 #include "platform/filesystem/output_paths.h"
 #include "tools/voca/command.h"
+#include "tools/voca/number_checks.h"
 #include "voca/core/error.h"
 #include "voca/eval/evaluate.h"
 
@@ -204,20 +207,20 @@ const bool registered = voca::cli::registerCommand(
            ->check(CLI::IsMember({"frames", "m"}))
            ->capture_default_str();
        app.add_option("--max-diff", o->max_diff_s, "Largest timestamp difference [s] for associating two poses")
-           ->check(CLI::NonNegativeNumber)
+           ->check(voca::cli::nonNegativeNumber())
            ->capture_default_str();
        app.add_option("--align", o->align, "ATE alignment: se3 (stereo, the paper), sim3 (with scale) or none")
            ->check(CLI::IsMember({"se3", "sim3", "none"}))
            ->capture_default_str();
        app.add_option("--ate-divergence", o->ate_divergence_m, "ATE RMSE [m] above which the run is divergent")
-           ->check(CLI::PositiveNumber)
+           ->check(voca::cli::positiveNumber())
            ->capture_default_str();
        app.add_option("--rte-divergence", o->rte_divergence_m, "RTE RMSE [m] above which the run is divergent")
-           ->check(CLI::PositiveNumber)
+           ->check(voca::cli::positiveNumber())
            ->capture_default_str();
        app.add_option("--expected-frames", o->expected_frames,
                       "Frames the run should have estimated; fewer than half estimated gives the verdict R")
-           ->check(CLI::PositiveNumber);
+           ->check(voca::cli::positiveNumber());
        app.add_option("--calib", o->calib_path,
                       "Calibration (Basalt json, Kalibr yaml, KITTI calib.txt or dataset folder) giving T_body_cam0, "
                       "to compare trajectories given in different frames")
