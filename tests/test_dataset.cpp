@@ -74,6 +74,22 @@ TEST_CASE("EurocWriter output is re-read by openDataset") {
   CHECK(voca::openDataset(dir / "mav0").calibration->filename() == "my_calib.json");
 }
 
+TEST_CASE("EurocWriter over an earlier sequence replaces it: its images do not stay beside the new ones") {
+  voca::test::ScratchDir dir("dataset-writer-over");
+  writeEuroc(dir.path(), 5);
+  writeText(dir / "mav0" / "cam0" / "data" / "notes.txt", "kept");  // not an image the writer owns
+  writeEuroc(dir.path(), 2);
+  for (const char* camera : {"cam0", "cam1"}) {
+    int images = 0;
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir / "mav0" / camera / "data")) {
+      images += entry.path().extension() == ".png" ? 1 : 0;
+    }
+    CHECK(images == 2);
+  }
+  CHECK(fs::exists(dir / "mav0" / "cam0" / "data" / "notes.txt"));
+  CHECK(voca::openDataset(dir.path()).frames.size() == 2);
+}
+
 TEST_CASE("EurocWriter rejects wrong image counts and timestamps going back") {
   voca::test::ScratchDir dir("dataset-writer-bad");
   voca::EurocWriter writer(dir.path());

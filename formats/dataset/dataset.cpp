@@ -322,6 +322,13 @@ EurocWriter::EurocWriter(const fs::path& root, int num_cameras) : mav0_(root / "
     std::error_code ec;
     fs::create_directories(cam_dir / "data", ec);
     if (ec) throw InputError((cam_dir / "data").string() + ": cannot create folder: " + ec.message());
+    // A sequence written over another replaces it: data.csv is rewritten, and the old images it no
+    // longer lists would stay beside the new ones, for tools that read the folder to mix up.
+    std::vector<fs::path> old_images;
+    for (const fs::directory_entry& entry : fs::directory_iterator(cam_dir / "data", ec)) {
+      if (entry.is_regular_file(ec) && entry.path().extension() == ".png") old_images.push_back(entry.path());
+    }
+    for (const fs::path& image : old_images) fs::remove(image, ec);
     csv_.emplace_back(cam_dir / "data.csv", std::ios::trunc);
     if (!csv_.back()) throw InputError((cam_dir / "data.csv").string() + ": cannot open for writing");
     csv_.back() << "#timestamp [ns],filename\n";
