@@ -452,6 +452,10 @@ TEST_CASE("pipeline e2e: a run that estimates no pose is an error naming the lik
   CHECK(no_cells.text.find("error: no pose was estimated: all 40 frames were lost") != std::string::npos);
   CHECK(no_cells.text.find("hold 0 grid cells for corners") != std::string::npos);
   CHECK(fs::exists(trajectory));
+  // Its rows hold the start pose, not estimates: no ATE or RTE over them.
+  CHECK(no_cells.text.find("not evaluated (no pose was estimated)") != std::string::npos);
+  CHECK(no_cells.text.find("ATE: ") == std::string::npos);
+  CHECK(no_cells.text.find("RTE (") == std::string::npos);
   // A tracker too small for the estimator: the option is named, not the calibration.
   const test::CommandOutput one_point = test::runVocaOutput(run + " --max-points 1");
   INFO(one_point.text);
@@ -470,6 +474,7 @@ TEST_CASE("pipeline e2e: a run that estimates no pose is an error naming the lik
   const test::CommandOutput normal = test::runVocaOutput(run);
   CHECK(normal.exit_code == 0);
   CHECK(normal.text.find("no pose was estimated") == std::string::npos);
+  CHECK(normal.text.find("ATE: ") != std::string::npos);
 }
 
 TEST_CASE("pipeline e2e: a run too short to evaluate says so once, naming its ground truth") {

@@ -487,10 +487,14 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     result.ground_truth = ground_truth_name;
     EvalOptions eval_options;
     eval_options.expected_frames = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
-    try {
-      result.eval = evaluateTrajectory(result.trajectory, *ground_truth, eval_options);
-    } catch (const InputError& e) {
-      result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", ground_truth_name, e.what()));
+    // Every row of a run that estimated nothing is the start pose held: its ATE and RTE would measure
+    // the ground truth's own motion, not an estimate.
+    if (result.failure.empty()) {
+      try {
+        result.eval = evaluateTrajectory(result.trajectory, *ground_truth, eval_options);
+      } catch (const InputError& e) {
+        result.warnings.push_back(fmt::format("cannot evaluate against {}: {}", ground_truth_name, e.what()));
+      }
     }
   }
   return result;
@@ -564,7 +568,8 @@ void printRunSummary(const VoRunResult& r, std::FILE* out) {
   } else if (!r.started) {
     fmt::print(out, "ATE/RTE: not computed (stopped before the first frame)\n");
   } else if (!r.ground_truth.empty()) {
-    fmt::print(out, "ground truth: {}, not evaluated (see the warning)\n", r.ground_truth);
+    fmt::print(out, "ground truth: {}, not evaluated ({})\n", r.ground_truth,
+               r.failure.empty() ? "see the warning" : "no pose was estimated");
   } else {
     fmt::print(out, "no ground truth with the dataset: ATE/RTE not computed\n");
   }
