@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <string>
+#include <string_view>
 
 #include <fmt/core.h>
 
@@ -55,6 +57,19 @@ int main(int argc, char** argv) {
       const std::string footer = sub->get_footer();
       sub->description(spec.summary);
       sub->footer(footer.empty() ? details : details + "\n\n" + footer);
+    }
+  }
+
+  // CLI11 answers a misspelt command with "A subcommand is required", which names neither.
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string_view given = argv[1];
+    const bool known =
+        std::any_of(commands.begin(), commands.end(), [&](const CommandSpec& spec) { return spec.name == given; });
+    if (!known) {
+      std::string names;
+      for (const CommandSpec& spec : commands) names += (names.empty() ? "" : ", ") + spec.name;
+      fmt::print(stderr, "voca: unknown command '{}' (the commands: {}); `voca --help` describes them\n", given, names);
+      return kUsageExitCode;
     }
   }
 
