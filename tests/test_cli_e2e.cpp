@@ -199,13 +199,21 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
   CHECK(no_runs.exit_code != 0);
   CHECK(no_runs.text.find("--repeat") != std::string::npos);
 
-  // voca demo --reuse on this sequence: both VO variants side by side, trajectories and overlay.
+  // voca demo --reuse on this sequence: both VO variants side by side, trajectories and overlay. The
+  // settings recorded with the sequences differ from the demo's defaults: they are reused as they are,
+  // with a warning, and the summary describes them, not the command line.
+  std::ofstream(demo / "synth.settings") << "gentle\n1.5\n";
+  std::ofstream(demo / "video.settings") << "800k\n";
   const auto demo_run = runVocaOutput("demo --out " + demo.string() + " --reuse");
   requireSuccess(demo_run, "voca demo");
   INFO("voca demo printed:\n" << demo_run.text);
-  CHECK(demo_run.text.find("reusing") != std::string::npos);
+  CHECK(demo_run.text.find("[1/4] reusing") != std::string::npos);
+  CHECK(demo_run.text.find("[2/4] reusing") != std::string::npos);
   CHECK(demo_run.text.find("rendering") == std::string::npos);
-  CHECK(demo_run.text.find("VOCA-RT demo: 30 frames") != std::string::npos);
+  CHECK(demo_run.text.find("was made with --motion and --seconds gentle 1.5, not as asked") != std::string::npos);
+  CHECK(demo_run.text.find("was made with --bitrate 800k, not as asked") != std::string::npos);
+  CHECK(demo_run.text.find("VOCA-RT demo: 30 frames of `gentle` motion, stereo encoded at 800k per camera") !=
+        std::string::npos);
   CHECK(demo_run.text.find("ATE [m]") != std::string::npos);
   CHECK(countLines(demo / "traj_none.txt") == 30);
   CHECK(countLines(demo / "traj_mv_parallel_of.txt") == 30);

@@ -4,10 +4,12 @@
 // the trajectories and an overlay video of the tracks written beside.
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +57,20 @@ int runSubcommand(const std::string& name, std::vector<std::string> args) {
   throw voca::RuntimeFailure(fmt::format("the `voca {}` command is not built into this binary", name));
 }
 
+// The settings a step ran with, kept beside the demo's output (one value a line): --reuse takes what is
+// there, and the summary must describe that, not the new command line.
+std::vector<std::string> readSettings(const fs::path& file) {
+  std::vector<std::string> values;
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);) values.push_back(line);
+  return values;
+}
+
+void writeSettings(const fs::path& file, const std::vector<std::string>& values) {
+  std::ofstream out(file);
+  for (const std::string& value : values) out << value << '\n';
+}
+
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -73,9 +89,22 @@ int runDemo(const DemoOptions& o) {
   fs::create_directories(out);
 
   const bool have_raw = fs::exists(raw / "calib.json");
+  const fs::path render_file = out / "synth.settings", encode_file = out / "video.settings";
+  // motion, seconds; bitrate: as asked, or as the reused sequences were made (empty when unknown).
+  std::vector<std::string> rendered = {o.motion, fmt::format("{}", o.seconds)}, encoded = {o.bitrate};
+  const auto reused = [&](const fs::path& folder, const fs::path& file, std::vector<std::string>& used,
+                          const char* options) {
+    const std::vector<std::string> asked = used;
+    used = readSettings(file);
+    if (!used.empty() && used != asked) {
+      fmt::print(stderr, "warning: --reuse: {} was made with {} {}, not as asked; drop --reuse to make it again\n",
+                 folder.string(), options, fmt::join(used, " "));
+    }
+  };
+  std::error_code ignored;
   if (!(o.reuse && have_raw)) {
     fmt::print(stderr, "[1/4] rendering {} s of fast motion with `voca synth` into {}\n", o.seconds, raw.string());
-    std::error_code ignored;
+    fs::remove(render_file, ignored);
     fs::remove_all(raw, ignored);
     const int code =
         runSubcommand("synth", {"--out", raw.string(), "--motion", o.motion, "--seconds", fmt::format("{}", o.seconds),
@@ -86,13 +115,20 @@ int runDemo(const DemoOptions& o) {
       fmt::print(stderr, "voca demo: stopped; the shortened rendering {} was removed\n", raw.string());
       return code;
     }
+    writeSettings(render_file, rendered);
   } else {
     fmt::print(stderr, "[1/4] reusing {}\n", raw.string());
+    reused(raw, render_file, rendered, "--motion and --seconds");
   }
   if (!(o.reuse && have_raw && fs::exists(video / "mav0" / "cam1" / "data.mp4"))) {
     fmt::print(stderr, "[2/4] encoding both cameras at {} with `voca encode` into {}\n", o.bitrate, video.string());
+    fs::remove(encode_file, ignored);
     const int code = runSubcommand("encode", {raw.string(), "--out", video.string(), "--bitrate", o.bitrate});
     if (code != 0) return code;
+    writeSettings(encode_file, encoded);
+  } else {
+    fmt::print(stderr, "[2/4] reusing {}\n", video.string());
+    reused(video, encode_file, encoded, "--bitrate");
   }
 
   fmt::print(stderr, "[3/4] running the VO on the decoded video: baseline and VOCA\n");
@@ -151,9 +187,11 @@ int runDemo(const DemoOptions& o) {
   };
   const char* rows[] = {"ATE [m]",   "RTE 6 frames [m]",           "resets + lost frames",
                         "keyframes", "frontend ms/frame (median)", "backend ms/frame (median)"};
-  fmt::print(
-      "\nVOCA-RT demo: {} frames of `{}` motion, stereo encoded at {} per camera, decoded with motion vectors\n\n",
-      variants[0].result.frames, o.motion, o.bitrate);
+  const std::string motion =
+      rendered.empty() ? fmt::format("the sequence in {}", raw.string()) : fmt::format("`{}` motion", rendered[0]);
+  const std::string rate = encoded.empty() ? std::string("as found in ") + video.string() : "at " + encoded[0];
+  fmt::print("\nVOCA-RT demo: {} frames of {}, stereo encoded {} per camera, decoded with motion vectors\n\n",
+             variants[0].result.frames, motion, rate);
   fmt::print("{:<28} {:>18} {:>24}\n", "", variants[0].label, variants[1].label);
   for (int i = 0; i < 6; ++i) {
     fmt::print("{:<28} {:>18} {:>24}\n", rows[i], cell(variants[0].result, i), cell(variants[1].result, i));
@@ -162,7 +200,7 @@ int runDemo(const DemoOptions& o) {
   for (const Variant& v : variants) fmt::print("  trajectory ({}): {}\n", v.label, v.trajectory.string());
   if (!variants[0].result.ground_truth.empty()) fmt::print("  ground truth: {}\n", variants[0].result.ground_truth);
   fmt::print("  overlay video (blue previous, yellow MV prior, green tracked): {}\n", overlay.string());
-  fmt::print("  sequences: {} (raw), {} (500 kbit/s video)\n", raw.string(), video.string());
+  fmt::print("  sequences: {} (raw), {} (video)\n", raw.string(), video.string());
   fmt::print("compare yourself: voca eval --gt {} --est {}\n", variants[0].result.ground_truth,
              variants[1].trajectory.string());
   fmt::print("total time {:.0f} s\n", secondsSince(start));
