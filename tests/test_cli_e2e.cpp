@@ -430,13 +430,18 @@ TEST_CASE("number options say what they expect: no 309-digit bound, text that is
   CHECK(runVocaOutput(eval + " --max-diff 0 --expected-frames 2").exit_code == 0);
 }
 
-TEST_CASE("a misspelt command is named with the commands there are") {
+TEST_CASE("a misspelt command is named with the commands there are; -o is --out everywhere") {
   const voca::test::CommandOutput result = runVocaOutput("rnu --help");
   INFO(result.text);
   CHECK(result.exit_code == 2);
   CHECK(result.text.find("voca: unknown command 'rnu' (the commands: demo, ") != std::string::npos);
   CHECK(result.text.find(", run, ") != std::string::npos);
   CHECK(runVocaOutput("run --help").exit_code == 0);
+  // -o is --out in every command that writes.
+  for (const char* command : {"synth", "mv", "encode", "run", "demo", "record", "live", "bench suite"}) {
+    INFO(command);
+    CHECK(runVocaOutput(std::string(command) + " --help").text.find("-o,--out") != std::string::npos);
+  }
 }
 
 TEST_CASE("voca demo checks its options before making its folder, and a stop removes a shortened rendering") {

@@ -656,6 +656,11 @@ void recordStream(const fs::path& file) {
   send.speed = 50.0;  // a file does not need the real rate
   const pipeline::StreamResult sent = pipeline::runStream(send);
   REQUIRE(sent.frames == static_cast<std::int64_t>(openDataset(rendered().raw).frames.size()));
+  // The video's bitrate is over the recording's time (20 Hz), not the 50 times shorter sending time.
+  CHECK(sent.recorded_seconds == doctest::Approx(static_cast<double>(sent.frames) / 20.0));
+  const double kbit_per_camera = static_cast<double>(sent.bytes) * 8.0 / sent.recorded_seconds / 2.0 / 1000.0;
+  CHECK(kbit_per_camera > 0.3 * static_cast<double>(send.encoder.bitrate_bps) / 1000.0);
+  CHECK(kbit_per_camera < 2.0 * static_cast<double>(send.encoder.bitrate_bps) / 1000.0);
 }
 
 }  // namespace

@@ -126,6 +126,7 @@ StreamResult runStream(const StreamOptions& options) {
   }
   writer.finish();
   if (result.frames > 0) result.seconds = static_cast<double>(platform::monotonicNs() - origin_mono) * 1e-9;
+  result.recorded_seconds = static_cast<double>(result.frames) / rate;
   result.encode_ms_p50 = quantileInPlace(encode_ms, 0.5);
   result.encode_ms_p99 = quantileInPlace(encode_ms, 0.99);
   result.encode_ms_max = encode_ms.empty() ? 0.0 : *std::max_element(encode_ms.begin(), encode_ms.end());
@@ -134,8 +135,11 @@ StreamResult runStream(const StreamOptions& options) {
 }
 
 void printStreamSummary(const StreamResult& r, std::FILE* out) {
-  fmt::print(out, "sent: {} stereo frames in {:.1f} s, {:.0f} kbit/s of video ({})\n", r.frames, r.seconds,
-             r.seconds > 0 ? static_cast<double>(r.bytes) * 8.0 / r.seconds / 1000.0 : 0.0, r.encoder_description);
+  // The video's bitrate is over the recording's time: at --speed 50 the same bytes go out 50 times faster.
+  fmt::print(out, "sent: {} stereo frames ({:.1f} s of recording) in {:.1f} s, video {:.0f} kbit/s per camera ({})\n",
+             r.frames, r.recorded_seconds, r.seconds,
+             r.recorded_seconds > 0 ? static_cast<double>(r.bytes) * 8.0 / r.recorded_seconds / 2.0 / 1000.0 : 0.0,
+             r.encoder_description);
   fmt::print(out, "encode per stereo frame: p50 {:.1f} ms, p99 {:.1f} ms, max {:.1f} ms; {} frames sent late\n",
              r.encode_ms_p50, r.encode_ms_p99, r.encode_ms_max, r.late_frames);
 }

@@ -30,6 +30,7 @@ struct StreamResult {
   std::int64_t frames = 0;          // stereo pairs sent
   std::int64_t bytes = 0;           // video payload of both cameras
   double seconds = 0.0;             // wall time from the first frame to the last
+  double recorded_seconds = 0.0;    // the recording time the frames sent span (frames / frame rate)
   double encode_ms_p50 = 0.0, encode_ms_p99 = 0.0, encode_ms_max = 0.0;  // both cameras, per pair
   std::int64_t late_frames = 0;  // pairs sent more than a frame period after their due time
   int stop_signal = 0;           // the signal that stopped the stream early (0: none)

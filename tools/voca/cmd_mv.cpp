@@ -190,7 +190,7 @@ const bool registered = voca::cli::registerCommand({
       auto opts = std::make_shared<MvOptions>();
       app.add_option("input", opts->input, "A video file, or a VOCA video dataset folder (mav0/camN/data.mp4)")
           ->required();
-      app.add_option("--out", opts->out, "Output folder (created)")->required();
+      app.add_option("--out,-o", opts->out, "Output folder (created)")->required();
       app.add_option("--camera", opts->camera, "Camera of a dataset folder: 0 or 1")->capture_default_str();
       app.add_option("--frames", opts->frames, "Frame range a:b (a inclusive, b exclusive; either may be omitted)");
       app.add_option("--format", opts->format, "png (one mv_<frame>.png per frame) or mp4 (mv.mp4)")

@@ -52,7 +52,7 @@ const bool registered = voca::cli::registerCommand(
            "(mav0/cam0, mav0/cam1), ground truth of the body frame at every frame\n"
            "(mav0/state_groundtruth_estimate0/data.csv) and the rig as Basalt JSON (<out>/calib.json).\n"
            "The output is deterministic: the same options give the same bytes.");
-       app.add_option("--out", options->out, "Output folder (created)")->required();
+       app.add_option("--out,-o", options->out, "Output folder (created)")->required();
        app.add_option("--camera", options->camera,
                       "euroc (pinhole-radtan 752x480), tumvi (kb4 512x512) or a calibration file/folder")
            ->capture_default_str();
