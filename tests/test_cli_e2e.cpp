@@ -430,6 +430,23 @@ TEST_CASE("number options say what they expect: no 309-digit bound, text that is
   CHECK(runVocaOutput(eval + " --max-diff 0 --expected-frames 2").exit_code == 0);
 }
 
+TEST_CASE("a file that is no recording is named as such, not as 'not a folder'") {
+  voca::test::ScratchDir dir("cli-not-recording");
+  std::ofstream(dir / "empty.ts").close();
+  std::ofstream(dir / "text.ts") << "not a transport stream\n";
+  for (const char* name : {"empty.ts", "text.ts"}) {
+    for (const std::string& command : {"run -o " + (dir / "t.txt").string(), std::string("track")}) {
+      const voca::test::CommandOutput result = runVocaOutput(command + " " + (dir / name).string());
+      INFO(result.text);
+      CHECK(result.exit_code == 1);
+      CHECK(result.text.find((dir / name).string() +
+                             (std::string(name) == "empty.ts" ? ": an empty file" : ": a file") +
+                             ", not an MPEG-TS recording of `voca stream`") != std::string::npos);
+    }
+  }
+  CHECK_FALSE(fs::exists(dir / "t.txt"));
+}
+
 TEST_CASE("a misspelt command is named with the commands there are; -o is --out everywhere") {
   const voca::test::CommandOutput result = runVocaOutput("rnu --help");
   INFO(result.text);

@@ -303,6 +303,14 @@ VoRunResult runVisualOdometry(const VoRunOptions& options) {
   if (const std::optional<std::string> recording = recordedStreamUrl(options.input)) {
     return runOnStream(options, *recording);
   }
+  if (std::error_code error; std::filesystem::is_regular_file(options.input, error)) {
+    // A file that is no recording: openDataset would only say that it is not a folder.
+    const bool empty = std::filesystem::file_size(options.input, error) == 0;
+    throw InputError(
+        fmt::format("{}: {}, not an MPEG-TS recording of `voca stream`; the input is a dataset or VOCA "
+                    "video folder, a stream URL (udp://...) or such a recording",
+                    options.input.string(), empty ? "an empty file" : "a file"));
+  }
   VoRunResult result;
   const Dataset raw = openDataset(options.input);
   result.warnings = raw.warnings;
