@@ -109,6 +109,18 @@ TEST_CASE("voca mv draws the codec's vectors on P-frames, as PNGs and as an mp4"
     CHECK(bad.text.find(option + ": expected") != std::string::npos);
   }
   CHECK_FALSE(fs::exists(dir / "bad3"));
+
+  // One camera encoded (`voca encode --cameras 1`): mv draws it; run names the missing left video.
+  const fs::path right_only = dir / "right-only";
+  REQUIRE(runVoca("encode " + raw.string() + " --out " + right_only.string() + " --cameras 1 --single-pass") == 0);
+  REQUIRE(runVoca("mv " + right_only.string() + " --camera 1 -o " + (dir / "right").string() + " --frames 1:2") == 0);
+  CHECK(fs::exists(dir / "right" / "mv_000001.png"));
+  const voca::test::CommandOutput run =
+      voca::test::runVocaOutput("run " + right_only.string() + " -o " + (dir / "t.txt").string());
+  INFO(run.text);
+  CHECK(run.exit_code == 1);
+  CHECK(run.text.find("cam0/data.mp4: missing (the VOCA video layout needs cam0 and cam1 videos; this folder holds "
+                      "cam1's alone)") != std::string::npos);
 }
 
 TEST_CASE("RgbVideoWriter opens its file at once; without a frame it leaves none behind") {

@@ -269,6 +269,10 @@ Dataset openDataset(const fs::path& path) {
   } else if (!mav0.empty() && fs::exists(mav0 / "cam0" / "data.csv")) {
     dataset.layout = DatasetLayout::kEuroc;
     readEuroc(mav0, dataset);
+  } else if (!mav0.empty() && fs::is_regular_file(mav0 / "cam1" / "data.mp4")) {
+    // `voca encode --cameras 1` writes the right camera alone.
+    throw InputError((mav0 / "cam0" / "data.mp4").string() +
+                     ": missing (the VOCA video layout needs cam0 and cam1 videos; this folder holds cam1's alone)");
   } else if (fs::is_directory(root / "image_0") && fs::exists(root / "times.txt")) {
     dataset.layout = DatasetLayout::kKitti;
     readKitti(root, dataset);

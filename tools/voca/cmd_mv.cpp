@@ -104,7 +104,15 @@ int runMv(const MvOptions& opts) {
 
   std::unique_ptr<VideoReader> reader;
   const voca::NamedPath output{"the output folder", opts.out};
-  if (fs::is_directory(opts.input)) {
+  // A folder of one camera (`voca encode --cameras N`) is no stereo dataset, but its video draws as well.
+  const fs::path camera_video = fs::path(opts.input) / "mav0" / fmt::format("cam{}", opts.camera) / "data.mp4";
+  const fs::path other_video = fs::path(opts.input) / "mav0" / fmt::format("cam{}", 1 - opts.camera) / "data.mp4";
+  const bool one_camera = fs::is_regular_file(camera_video) && !fs::exists(other_video);
+  if (one_camera) {
+    const voca::NamedPath folder{"the dataset's mav0 folder", fs::path(opts.input) / "mav0"};
+    voca::requireOutputsApart(std::span(&output, 1), std::span(&folder, 1));
+    reader = std::make_unique<VideoReader>(camera_video, std::vector<std::int64_t>{}, decoder_options);
+  } else if (fs::is_directory(opts.input)) {
     const voca::Dataset dataset = voca::openDataset(opts.input);
     if (dataset.layout != voca::DatasetLayout::kVocaVideo) {
       throw voca::InputError(opts.input + ": a " + std::string(voca::layoutName(dataset.layout)) +
