@@ -428,6 +428,21 @@ TEST_CASE("number options say what they expect: no 309-digit bound, text that is
   }
   // The bounds themselves pass.
   CHECK(runVocaOutput(eval + " --max-diff 0 --expected-frames 2").exit_code == 0);
+  // A missing input is bad input like in the other commands: exit code 1, named.
+  const std::pair<std::string, std::string> missing[] = {
+      {"eval --gt " + (dir / "nope.txt").string() + " --est " + trajectory.string(),
+       "--gt " + (dir / "nope.txt").string() + ": no such file"},
+      {"eval --gt " + trajectory.string() + " --est " + dir.path().string(),
+       "--est " + dir.path().string() + ": a folder, not a file"},
+      {eval + " --est-times " + (dir / "times.txt").string(), "--est-times " + (dir / "times.txt").string()},
+  };
+  for (const auto& [args, message] : missing) {
+    const voca::test::CommandOutput result = runVocaOutput(args);
+    INFO(args);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("voca eval: error: " + message) != std::string::npos);
+  }
 }
 
 TEST_CASE("a file that is no recording is named as such, not as 'not a folder'") {
