@@ -395,6 +395,14 @@ TEST_CASE("pacing and waiting bounds: NaN, infinite and negative values are refu
     CHECK(result.exit_code == 1);
     CHECK(result.text.find("expected seconds above 0 and at most 86400") != std::string::npos);
   }
+  // The tracker's capacity, named by its option before the input is opened.
+  for (const char* points : {"0", "70000"}) {
+    const voca::test::CommandOutput result = runVocaOutput(run + " --max-points " + points);
+    INFO(result.text);
+    CHECK(result.exit_code == 1);
+    CHECK(result.text.find("--max-points " + std::string(points) + ": expected 1 to 65536 points per camera") !=
+          std::string::npos);
+  }
 }
 
 TEST_CASE("number options say what they expect: no 309-digit bound, text that is no number named as such") {

@@ -28,6 +28,7 @@
 #include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 #include "voca/frontend/detector.h"
+#include "voca/frontend/frontend.h"
 
 namespace voca::pipeline {
 
@@ -299,6 +300,11 @@ int frontendCameraThreads(const VoRunOptions& options) {
 }  // namespace
 
 VoRunResult runVisualOdometry(const VoRunOptions& options) {
+  // Before the input is opened (the frontend would refuse it only after the decoder started).
+  if (options.max_points < 1 || options.max_points > FrontendCapacities::kMaxPointsBound) {
+    throw InputError(fmt::format("--max-points {}: expected 1 to {} points per camera", options.max_points,
+                                 FrontendCapacities::kMaxPointsBound));
+  }
   if (isStreamUrl(options.input.string())) return runOnStream(options, options.input.string());
   if (const std::optional<std::string> recording = recordedStreamUrl(options.input)) {
     return runOnStream(options, *recording);

@@ -86,12 +86,9 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   align_.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
   align_.skip_coarse_outside = config_.skip_coarse_outside;
   max_points_ = capacities.max_points;
-  // Twice what a detection grid of 16 px cells fills on a 4K image (one corner per cell, ~32,000);
-  // the bound keeps a mistyped capacity from allocating gigabytes (about 8 KB per point in all).
-  constexpr int kMaxPointsPerCamera = 1 << 16;
-  if (max_points_ < 1 || max_points_ > kMaxPointsPerCamera) {
-    throw InputError(
-        fmt::format("frontend capacity: max_points {} must be between 1 and {}", max_points_, kMaxPointsPerCamera));
+  if (max_points_ < 1 || max_points_ > FrontendCapacities::kMaxPointsBound) {
+    throw InputError(fmt::format("frontend capacity: max_points {} must be between 1 and {}", max_points_,
+                                 FrontendCapacities::kMaxPointsBound));
   }
   width_ = rig.cameras[0].width;
   height_ = rig.cameras[0].height;

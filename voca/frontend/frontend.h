@@ -24,6 +24,10 @@ namespace voca {
 
 // Upper bounds the frontend allocates for once.
 struct FrontendCapacities {
+  // The largest max_points: twice what a detection grid of 16 px cells fills on a 4K image (one corner
+  // per cell, ~32,000); the bound keeps a mistyped capacity from allocating gigabytes (about 8 KB per
+  // point in all).
+  static constexpr int kMaxPointsBound = 1 << 16;
   int max_points = 500;  // per camera (template memory: about 6 KB per point and camera)
   int max_width = 0;     // 0 = the calibration's image size
   int max_height = 0;
