@@ -44,7 +44,7 @@ pipeline::VoRunResult runVo(const std::string& input, const std::filesystem::pat
   options.config = config;
   options.progress = false;
   pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(result.pipeline.error);
+  REQUIRE_FALSE(result.pipeline_report.error);
   return result;
 }
 
@@ -144,7 +144,7 @@ TEST_CASE("backend e2e: --encode keeps the recording's ground truth; a KITTI --g
     options.progress = false;
     if (explicit_gt) options.ground_truth = *data / ".." / ".." / "poses" / "06.txt";
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(result.pipeline.error);
+    REQUIRE_FALSE(result.pipeline_report.error);
     INFO("explicit --gt: " << explicit_gt);
     // Before, the temporary encoding had no ground truth and a KITTI poses file given with --gt had
     // no timestamps to associate: either way no ATE.

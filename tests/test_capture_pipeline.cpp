@@ -61,21 +61,21 @@ TEST_CASE("live cameras run through the pipeline with the live policy: nothing w
   options.calibration = calibration;
   options.run.estimate = false;  // the frontend is enough to exercise the live path; the fake scene has no depth
   options.run.progress = false;
-  options.run.pipeline.stop_requested = [] { return false; };
+  options.run.pipeline_options.stop_requested = [] { return false; };
   SlowSink slow;
   options.run.extra_sinks = {&slow};
   const VoRunResult result = runVisualOdometryOnCameras(options, io);
 
-  REQUIRE_FALSE(result.pipeline.error.has_value());
-  CHECK(result.pipeline.produced == 30);
-  CHECK(result.pipeline.completed + result.pipeline.dropped == result.pipeline.produced);
-  CHECK(result.frames == result.pipeline.completed);
+  REQUIRE_FALSE(result.pipeline_report.error.has_value());
+  CHECK(result.pipeline_report.produced == 30);
+  CHECK(result.pipeline_report.completed + result.pipeline_report.dropped == result.pipeline_report.produced);
+  CHECK(result.frames == result.pipeline_report.completed);
   // 25 ms per frame against 10 ms between frames: the camera outruns the pipeline. The frames it made
   // that the pipeline never took were lost in the driver (its buffers were full), none queued up:
   // every sequence number is a frame produced or a frame counted lost.
   CHECK(result.source.frames_lost > 15);
   CHECK(static_cast<std::int64_t>(io.lastSequence("/dev/video0")) + 1 ==
-        result.pipeline.produced + result.source.frames_lost);
+        result.pipeline_report.produced + result.source.frames_lost);
   CHECK(result.description.find("side-by-side stereo camera /dev/video0") != std::string::npos);
   CHECK(io.openHandles() == 0);
   CHECK(io.mappedBuffers() == 0);
@@ -112,14 +112,14 @@ TEST_CASE("a camera that disappears mid-run ends the run with the error and ever
   options.calibration = calibration;
   options.run.estimate = false;
   options.run.progress = false;
-  options.run.pipeline.stop_requested = [] { return false; };
+  options.run.pipeline_options.stop_requested = [] { return false; };
   const VoRunResult result = runVisualOdometryOnCameras(options, io);
-  REQUIRE(result.pipeline.error.has_value());
-  test::expectError(result.pipeline.error->message, "/dev/video0: the device disappeared after 15 frames");
-  CHECK(result.pipeline.produced == 15);
+  REQUIRE(result.pipeline_report.error.has_value());
+  test::expectError(result.pipeline_report.error->message, "/dev/video0: the device disappeared after 15 frames");
+  CHECK(result.pipeline_report.produced == 15);
   // The live policy may drop a waiting frame when the frontend falls behind (a loaded machine); every
   // frame taken before the device vanished is estimated or counted dropped, none silently discarded.
-  INFO("completed " << result.pipeline.completed << ", dropped " << result.pipeline.dropped);
-  CHECK(result.frames == result.pipeline.completed);
-  CHECK(result.pipeline.completed + result.pipeline.dropped == 15);
+  INFO("completed " << result.pipeline_report.completed << ", dropped " << result.pipeline_report.dropped);
+  CHECK(result.frames == result.pipeline_report.completed);
+  CHECK(result.pipeline_report.completed + result.pipeline_report.dropped == 15);
 }

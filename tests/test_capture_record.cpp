@@ -107,9 +107,9 @@ TEST_CASE("voca record's path: cameras -> x264 -> a video folder that voca run's
   run.input = dir.path() / "rec";
   run.estimate = false;
   run.progress = false;
-  run.pipeline.stop_requested = [] { return false; };
+  run.pipeline_options.stop_requested = [] { return false; };
   const VoRunResult replay = runVisualOdometry(run);
-  CHECK_FALSE(replay.pipeline.error.has_value());
+  CHECK_FALSE(replay.pipeline_report.error.has_value());
   CHECK(replay.frames == 24);
   CHECK(replay.has_motion);
 }

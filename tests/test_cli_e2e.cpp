@@ -120,8 +120,8 @@ TEST_CASE("odd frame sizes work end to end: synth, encode, decode, track, run --
     // Both progress lines of the run, the encoding's and the VO's, as whole lines in a log.
     INFO("voca run printed:\n" << ran.text);
     CHECK(ran.text.find('\r') == std::string::npos);
-    CHECK(hasLine(ran.text, "encoding camera 0 pass 1/2: frame 1/30"));
-    CHECK(hasLine(ran.text, "encoding camera 1 pass 2/2: frame 30/30"));
+    CHECK(hasLine(ran.text, "cam0 pass 1/2: frame 1/30 (3%)"));
+    CHECK(hasLine(ran.text, "cam1 pass 2/2: frame 30/30 (100%)"));
     CHECK(ran.text.find("\nframe 30/30: ") != std::string::npos);
   }
   CHECK(countLines(trajectory) == 30);

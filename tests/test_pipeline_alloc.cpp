@@ -71,6 +71,9 @@ int collectFfmpegRanges(dl_phdr_info* info, std::size_t /*size*/, void* /*data*/
 }
 }  // namespace
 
+// The project builds with hidden visibility; these must stay exported or the FFmpeg libraries keep
+// calling libc's malloc and their allocations go uncounted.
+#pragma GCC visibility push(default)
 extern "C" {
 void* __libc_malloc(std::size_t size);
 void* __libc_calloc(std::size_t count, std::size_t size);
@@ -107,6 +110,7 @@ int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
 }
 void free(void* p) { __libc_free(p); }
 }
+#pragma GCC visibility pop
 
 // operator new goes through malloc above (from the C++ library: counted as not FFmpeg's).
 
@@ -314,15 +318,15 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
   options.input = folder;
   options.progress = false;
   options.decoder = decode::DecoderKind::kSoftware;
-  options.pipeline.threads = 0;
+  options.pipeline_options.threads = 0;
   options.frontend_camera_threads = 2;  // the right camera on the frontend's helper thread
   options.extra_sinks = {&window};
-  options.pipeline.trace_path = dir / "trace.json";
+  options.pipeline_options.trace_path = dir / "trace.json";
   VideoFolderSource source(dataset);
   const pipeline::VoRunResult result = runVisualOdometryOn(source, rig, VocaConfig{}, options);
-  REQUIRE_FALSE(result.pipeline.error);
+  REQUIRE_FALSE(result.pipeline_report.error);
   REQUIRE(result.frames == kFrames);
-  CHECK(result.pipeline.threads == 5);
+  CHECK(result.pipeline_report.threads == 5);
   CHECK(result.frontend_camera_threads == 2);
   // Between frame kWarmup and the last frame leaving the pipeline, all threads together allocated only
   // FFmpeg's share: the queues, slots, threads and sinks add nothing.
@@ -330,7 +334,7 @@ TEST_CASE("pipeline: steady state allocates only what FFmpeg allocates per frame
   MESSAGE("pipelined: " << window.total << " allocations over " << window_frames << " frames, " << window.ffmpeg
                         << " of them FFmpeg's");
   CHECK(window.total == window.ffmpeg);
-  CHECK(result.pipeline.stages[2].helper_service.count() == kFrames);  // the trace had helper slices to write
+  CHECK(result.pipeline_report.stages[2].helper_service.count() == kFrames);  // the trace had helper slices to write
   // Up to a pool's worth of frames (8) may be read and decoded ahead at either end of the window.
   CHECK(static_cast<double>(window.ffmpeg) >= (read_per_frame + decode_per_frame) * (window_frames - 8));
   CHECK(static_cast<double>(window.ffmpeg) <= (read_per_frame + decode_per_frame) * (window_frames + 8));

@@ -61,7 +61,7 @@ pipeline::VoRunOptions quietRun(const fs::path& input, const fs::path& trajector
   options.input = input;
   options.trajectory_file = trajectory;
   options.progress = false;
-  options.pipeline.threads = threads;
+  options.pipeline_options.threads = threads;
   return options;
 }
 
@@ -73,15 +73,15 @@ void expectSameTrajectory(const std::string& name, pipeline::VoRunOptions option
   const std::pair<int, int> layouts[] = {{1, 1}, {2, 2}, {0, 1}, {0, 2}};  // threads, frontend camera threads
   for (const auto& [threads, camera_threads] : layouts) {
     options.trajectory_file = dir / ("traj_" + std::to_string(threads) + "_" + std::to_string(camera_threads) + ".txt");
-    options.pipeline.threads = threads;
+    options.pipeline_options.threads = threads;
     options.frontend_camera_threads = camera_threads;
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    INFO(name << ", threads option " << threads << " (" << result.pipeline.threads << " threads), frontend on "
+    INFO(name << ", threads option " << threads << " (" << result.pipeline_report.threads << " threads), frontend on "
               << camera_threads);
-    REQUIRE_FALSE(result.pipeline.error);
+    REQUIRE_FALSE(result.pipeline_report.error);
     CHECK(result.frontend_camera_threads == camera_threads);
-    CHECK(result.pipeline.dropped == 0);
-    CHECK(result.frames == result.pipeline.produced);
+    CHECK(result.pipeline_report.dropped == 0);
+    CHECK(result.frames == result.pipeline_report.produced);
     const std::string text = fileText(options.trajectory_file);
     CHECK(std::count(text.begin(), text.end(), '\n') == result.frames + 1);  // header + a row per frame
     if (threads == 1) {
@@ -135,7 +135,7 @@ TEST_CASE("pipeline e2e: pipelined runs write the single-threaded trajectory byt
     if (!data) return;
     // Encoded once, so the three runs decode the same video.
     test::ScratchDir dir("pipeline-euroc");
-    REQUIRE(pipeline::encodeForReplay(*data, dir / "video", 500000, std::nullopt, false, {}));
+    REQUIRE(encode::encodeForReplay(*data, dir / "video", 500000, std::nullopt, false, {}));
     expectSameTrajectory("micro EuRoC 500k", quietRun(dir / "video", {}, 1));
   }
   SUBCASE("KITTI 06 raw: the stereo guess uses the backend's depth through the fixed-lag channel") {
@@ -208,7 +208,7 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   test::ScratchDir dir("pipeline-default-config");
   pipeline::VoRunOptions options = quietRun(rendered().video, dir / "default.txt", 1);
   const pipeline::VoRunResult by_default = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(by_default.pipeline.error);
+  REQUIRE_FALSE(by_default.pipeline_report.error);
   // The shipped mode is in force: where a point has a vector only the vector's track runs (`mv`), so
   // no prior track was skipped for a plain one or rescued a plain one.
   CHECK(by_default.config.frontend.prior_mode == PriorMode::kMv);
@@ -217,14 +217,14 @@ TEST_CASE("pipeline e2e: a run without --config runs the shipped config of its i
   CHECK(by_default.frontend.rescued == 0);
   options.trajectory_file = dir / "euroc.txt";
   options.config = fs::path("euroc");
-  REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline.error);
+  REQUIRE_FALSE(pipeline::runVisualOdometry(options).pipeline_report.error);
   CHECK(fileText(dir / "default.txt") == fileText(dir / "euroc.txt"));
   // In the paper's mode the same file's prior_agree_radius_px is in force, and the prior tracks it
   // skips reach the run's totals (the only positive check of that sum through the pipeline).
   options.trajectory_file = dir / "parallel.txt";
   options.mode = PriorMode::kMvParallelOf;
   const pipeline::VoRunResult parallel = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(parallel.pipeline.error);
+  REQUIRE_FALSE(parallel.pipeline_report.error);
   CHECK(parallel.frontend.prior_confirmed > 0);
 }
 
@@ -240,10 +240,10 @@ TEST_CASE("pipeline e2e: a later start frame tracks from that frame; a video is 
     pipeline::VoRunOptions options = quietRun(input, dir / "from10.txt", 1);
     options.first_frame = 10;
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(result.pipeline.error);
+    REQUIRE_FALSE(result.pipeline_report.error);
     CHECK(result.frames == 30);
-    CHECK(result.pipeline.damaged == 0);
-    CHECK(result.pipeline.dropped == 0);
+    CHECK(result.pipeline_report.damaged == 0);
+    CHECK(result.pipeline_report.dropped == 0);
     REQUIRE(result.rows.size() == 30);
     CHECK(result.rows.front().frame_index == 10);
     CHECK(result.rows.front().missing_before == 0);  // a start, not a gap
@@ -254,10 +254,10 @@ TEST_CASE("pipeline e2e: a later start frame tracks from that frame; a video is 
 
     // --frames counts from the start; the pipelined run writes the same trajectory.
     options.max_frames = 12;
-    options.pipeline.threads = 0;
+    options.pipeline_options.threads = 0;
     options.trajectory_file = dir / "from10_12.txt";
     const pipeline::VoRunResult limited = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(limited.pipeline.error);
+    REQUIRE_FALSE(limited.pipeline_report.error);
     CHECK(limited.frames == 12);
     const std::string all = fileText(dir / "from10.txt");
     const std::string first12 = fileText(dir / "from10_12.txt");
@@ -277,7 +277,7 @@ TEST_CASE("pipeline e2e: prior_max_qp reaches the decoder: the quantisers are ex
   pipeline::VoRunOptions options = quietRun(rendered().video, dir / "qp.txt", 1);
   options.config = dir / "qp.json";
   const pipeline::VoRunResult strict = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(strict.pipeline.error);
+  REQUIRE_FALSE(strict.pipeline_report.error);
   REQUIRE(strict.frontend.with_vector > 0);
   // QP 1 is below anything x264 chooses at 500 kbit/s: every vector with a quantiser is distrusted.
   CHECK(strict.frontend.distrusted == strict.frontend.with_vector);
@@ -301,7 +301,7 @@ TEST_CASE("pipeline e2e: presmooth \"raw\" smooths the raw dataset's frames and 
     pipeline::VoRunOptions options = quietRun(input, out, 1);
     options.config = dir / (value + ".json");
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(result.pipeline.error);
+    REQUIRE_FALSE(result.pipeline_report.error);
     return fileText(out);
   };
   for (const fs::path& input : {rendered().raw, rendered().video}) {
@@ -321,24 +321,24 @@ TEST_CASE("pipeline e2e: a damaged packet mid-stream is skipped and listed; --st
 
   pipeline::VoRunOptions options = quietRun(video, dir / "traj.txt", 0);
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(result.pipeline.error);
-  REQUIRE_FALSE(result.pipeline.released.empty());
-  CHECK(result.pipeline.released.front().frame_index == 24);
-  CHECK(result.pipeline.released.front().reason == pipeline::ReleaseReason::kDamaged);
+  REQUIRE_FALSE(result.pipeline_report.error);
+  REQUIRE_FALSE(result.pipeline_report.released.empty());
+  CHECK(result.pipeline_report.released.front().frame_index == 24);
+  CHECK(result.pipeline_report.released.front().reason == pipeline::ReleaseReason::kDamaged);
   // The paper's encoding has no I-picture after the first: every later picture is predicted from the
   // damaged one, shows its concealment moved along, and is skipped too.
   CHECK(result.frames == 24);
-  CHECK(result.pipeline.damaged == 16);
+  CHECK(result.pipeline_report.damaged == 16);
   CHECK(countRows(dir / "traj.txt") == static_cast<std::size_t>(result.frames));
   CHECK(result.backend.resets == 0);
 
   options.strict = true;
   options.trajectory_file = dir / "strict.txt";
   const pipeline::VoRunResult strict = pipeline::runVisualOdometry(options);
-  REQUIRE(strict.pipeline.error);
-  CHECK(strict.pipeline.error->stage == "decode");
-  CHECK(strict.pipeline.error->frame_index == 24);
-  CHECK(strict.pipeline.error->message.find("cam0") != std::string::npos);
+  REQUIRE(strict.pipeline_report.error);
+  CHECK(strict.pipeline_report.error->stage == "decode");
+  CHECK(strict.pipeline_report.error->frame_index == 24);
+  CHECK(strict.pipeline_report.error->message.find("cam0") != std::string::npos);
   // Everything before the damage was estimated and written.
   CHECK(countRows(dir / "strict.txt") == 24);
 }
@@ -356,9 +356,9 @@ TEST_CASE("pipeline e2e: after a damaged picture the stream heals at the next I-
   test::damagePacket(video / "mav0" / "cam1" / "data.mp4", 18);
 
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(quietRun(video, dir / "traj.txt", 1));
-  REQUIRE_FALSE(result.pipeline.error);
+  REQUIRE_FALSE(result.pipeline_report.error);
   std::vector<std::int64_t> skipped;
-  for (const auto& frame : result.pipeline.released) {
+  for (const auto& frame : result.pipeline_report.released) {
     if (frame.reason == pipeline::ReleaseReason::kDamaged) skipped.push_back(frame.frame_index);
   }
   // Frame 18 (damaged) and 19 (predicted from it); frame 20 is an I-picture again.
@@ -385,12 +385,12 @@ TEST_CASE("pipeline e2e: an unreadable image in a raw dataset is skipped as dama
     INFO("threads " << threads);
     pipeline::VoRunOptions options = quietRun(raw, dir / "traj.txt", threads);
     const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(result.pipeline.error);
+    REQUIRE_FALSE(result.pipeline_report.error);
     // Counted and listed as the video case counts a frame it cannot decode.
-    CHECK(result.pipeline.damaged == 1);
-    REQUIRE(result.pipeline.released.size() == 1);
-    CHECK(result.pipeline.released.front().frame_index == 24);
-    CHECK(result.pipeline.released.front().reason == pipeline::ReleaseReason::kDamaged);
+    CHECK(result.pipeline_report.damaged == 1);
+    REQUIRE(result.pipeline_report.released.size() == 1);
+    CHECK(result.pipeline_report.released.front().frame_index == 24);
+    CHECK(result.pipeline_report.released.front().reason == pipeline::ReleaseReason::kDamaged);
     CHECK(result.frames == 39);
     CHECK(countRows(dir / "traj.txt") == 39);
     bool named = false;
@@ -536,16 +536,16 @@ TEST_CASE("pipeline e2e: a source that fails or ends early leaves a clean result
     FaultySource failing(openDatasetSource(dataset), 17, -1);
     pipeline::VoRunOptions options = quietRun({}, dir / "failing.txt", threads);
     const pipeline::VoRunResult failed = pipeline::runVisualOdometryOn(failing, rig, VocaConfig{}, options);
-    REQUIRE(failed.pipeline.error);
-    CHECK(failed.pipeline.error->stage == "read");
-    CHECK(failed.pipeline.error->message.find("device disappeared") != std::string::npos);
+    REQUIRE(failed.pipeline_report.error);
+    CHECK(failed.pipeline_report.error->stage == "read");
+    CHECK(failed.pipeline_report.error->message.find("device disappeared") != std::string::npos);
     CHECK(failed.frames == 17);
     CHECK(countRows(dir / "failing.txt") == 17);
 
     FaultySource ending(openDatasetSource(dataset), -1, 12);
     options.trajectory_file = dir / "ending.txt";
     const pipeline::VoRunResult ended = pipeline::runVisualOdometryOn(ending, rig, VocaConfig{}, options);
-    CHECK_FALSE(ended.pipeline.error);
+    CHECK_FALSE(ended.pipeline_report.error);
     CHECK(ended.frames == 12);
     CHECK(loadTrajectory(dir / "ending.txt").poses.size() == 12);
   }
@@ -733,20 +733,20 @@ TEST_CASE("pipeline e2e: live-rate replay paces the input and reports latency; o
   pipeline::VoRunOptions options = quietRun(rendered().video, dir / "traj.txt", 0);
   options.realtime = true;
   options.statistics_file = dir / "stats.json";
-  options.pipeline.trace_path = dir / "trace.json";
+  options.pipeline_options.trace_path = dir / "trace.json";
   options.trajectory_format = TrajectoryFormat::kKitti;
   const auto start = std::chrono::steady_clock::now();
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  REQUIRE_FALSE(result.pipeline.error);
+  REQUIRE_FALSE(result.pipeline_report.error);
   // 40 frames at 20 Hz: 39 intervals of 50 ms.
   CHECK(seconds >= 1.9);
-  CHECK(result.pipeline.completed + result.pipeline.dropped == 40);
-  CHECK(result.pipeline.end_to_end.count() == result.pipeline.completed);
+  CHECK(result.pipeline_report.completed + result.pipeline_report.dropped == 40);
+  CHECK(result.pipeline_report.end_to_end.count() == result.pipeline_report.completed);
   // The source's wait for each frame's due time is the recording's rate, not the source's work: its
   // service time is the read alone, far below the 50 ms between frames.
-  REQUIRE(!result.pipeline.stages.empty());
-  CHECK(result.pipeline.stages.front().service.quantileNs(0.5) < 10'000'000);
+  REQUIRE(!result.pipeline_report.stages.empty());
+  CHECK(result.pipeline_report.stages.front().service.quantileNs(0.5) < 10'000'000);
   // KITTI rows: 12 numbers, one row per estimated frame.
   const Trajectory kitti = loadTrajectory(dir / "traj.txt", TrajectoryFormat::kKitti);
   CHECK(kitti.poses.size() == static_cast<std::size_t>(result.frames));

@@ -227,7 +227,7 @@ pipeline::StreamOptions senderOptions(const fs::path& raw, const std::string& ur
 pipeline::VoRunOptions quietOptions() {
   pipeline::VoRunOptions options;
   options.progress = false;
-  options.pipeline.stop_requested = [] { return false; };
+  options.pipeline_options.stop_requested = [] { return false; };
   return options;
 }
 
@@ -300,9 +300,9 @@ TEST_CASE("a stream over loopback arrives bit-identical and the live VO matches 
   MemorySource offline_source(received_info, local);
   const pipeline::VoRunResult offline =
       pipeline::runVisualOdometryOn(offline_source, rig, VocaConfig{}, quietOptions());
-  REQUIRE_FALSE(offline.pipeline.error);
-  REQUIRE_FALSE(live->pipeline.error);
-  CHECK(live->pipeline.damaged == 0);
+  REQUIRE_FALSE(offline.pipeline_report.error);
+  REQUIRE_FALSE(live->pipeline_report.error);
+  CHECK(live->pipeline_report.damaged == 0);
   std::map<std::int64_t, Eigen::Vector3d> offline_positions;
   for (const auto& pose : offline.trajectory.poses) offline_positions[pose.t_ns] = pose.T_world_body.translation();
   REQUIRE(offline.trajectory.poses.size() == static_cast<std::size_t>(n));
@@ -310,9 +310,9 @@ TEST_CASE("a stream over loopback arrives bit-identical and the live VO matches 
   // drop the two runs see the same frames and must agree exactly (the VO is deterministic); with
   // one, later poses come from a slightly different frame history, so they agree within 5 cm on a
   // sequence moving a few decimetres.
-  const bool exact = live->pipeline.dropped == 0;
-  MESSAGE("live run dropped " << live->pipeline.dropped << " frames (live policy)");
-  CHECK(live->trajectory.poses.size() + static_cast<std::size_t>(live->pipeline.dropped) ==
+  const bool exact = live->pipeline_report.dropped == 0;
+  MESSAGE("live run dropped " << live->pipeline_report.dropped << " frames (live policy)");
+  CHECK(live->trajectory.poses.size() + static_cast<std::size_t>(live->pipeline_report.dropped) ==
         static_cast<std::size_t>(n));
   for (const auto& pose : live->trajectory.poses) {
     REQUIRE(offline_positions.count(pose.t_ns) == 1);
@@ -612,7 +612,7 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   // A trajectory an earlier run left there is not this run's: untouched, and not named as its output.
   std::ofstream(dir / "earlier.txt") << "# an earlier run's trajectory\n";
   const auto start = std::chrono::steady_clock::now();
-  options.pipeline.stop_requested = [&] {
+  options.pipeline_options.stop_requested = [&] {
     return std::chrono::steady_clock::now() - start > std::chrono::milliseconds(300);
   };
   const pipeline::VoRunResult result = pipeline::runVisualOdometry(options);
@@ -634,7 +634,7 @@ TEST_CASE("a run stopped while waiting for its stream writes its statistics and 
   options.trajectory_file = dir / "earlier.txt";
   options.input = "udp://127.0.0.1:" + std::to_string(freeUdpPort());
   const auto again = std::chrono::steady_clock::now();
-  options.pipeline.stop_requested = [&] {
+  options.pipeline_options.stop_requested = [&] {
     return std::chrono::steady_clock::now() - again > std::chrono::milliseconds(300);
   };
   CHECK_FALSE(pipeline::runVisualOdometry(options).started);
@@ -693,9 +693,9 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
   MemorySource offline_source(source.info(), local);
   const pipeline::VoRunResult offline =
       pipeline::runVisualOdometryOn(offline_source, rig, VocaConfig{}, quietOptions());
-  REQUIRE_FALSE(replayed.pipeline.error);
-  REQUIRE_FALSE(offline.pipeline.error);
-  CHECK(replayed.pipeline.dropped == 0);
+  REQUIRE_FALSE(replayed.pipeline_report.error);
+  REQUIRE_FALSE(offline.pipeline_report.error);
+  CHECK(replayed.pipeline_report.dropped == 0);
   REQUIRE(replayed.trajectory.poses.size() == static_cast<std::size_t>(n));
   REQUIRE(offline.trajectory.poses.size() == static_cast<std::size_t>(n));
   for (std::size_t i = 0; i < replayed.trajectory.poses.size(); ++i) {
@@ -712,8 +712,8 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
   for (std::size_t k = 0; k < 2; ++k) {
     options.input = k == 0 ? recording : fs::path(*url);
     runs[k] = pipeline::runVisualOdometry(options);
-    REQUIRE_FALSE(runs[k].pipeline.error);
-    CHECK(runs[k].pipeline.dropped == 0);
+    REQUIRE_FALSE(runs[k].pipeline_report.error);
+    CHECK(runs[k].pipeline_report.dropped == 0);
     CHECK(runs[k].frames == n);
     CHECK(runs[k].description.find("recorded stream") == 0);
   }
@@ -728,7 +728,7 @@ TEST_CASE("a stream recorded to a file replays every frame, exactly as the offli
   options.first_frame = 10;
   options.max_frames = 20;
   const pipeline::VoRunResult later = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(later.pipeline.error);
+  REQUIRE_FALSE(later.pipeline_report.error);
   CHECK(later.frames == 20);
   REQUIRE(later.trajectory.poses.size() == 20);
   CHECK(later.trajectory.poses.front().t_ns == dataset.frames[10].t_ns);
@@ -787,7 +787,7 @@ TEST_CASE("a recording with TS packets missing: counted and skipped to the next 
   options.input = dir / "damaged.ts";
   options.calibration = *dataset.calibration;
   const pipeline::VoRunResult skipped = pipeline::runVisualOdometry(options);
-  REQUIRE_FALSE(skipped.pipeline.error);
+  REQUIRE_FALSE(skipped.pipeline_report.error);
   CHECK(skipped.source.frames_lost > 0);
   CHECK(skipped.source.frames_lost <= kGop);  // up to the next keyframe of both cameras
   CHECK(skipped.frames + skipped.source.frames_lost == n);
@@ -795,9 +795,9 @@ TEST_CASE("a recording with TS packets missing: counted and skipped to the next 
 
   options.strict = true;
   const pipeline::VoRunResult stopped = pipeline::runVisualOdometry(options);
-  REQUIRE(stopped.pipeline.error);
-  CHECK(stopped.pipeline.error->message.find("damaged.ts: an access unit of camera") != std::string::npos);
-  CHECK(stopped.pipeline.error->message.find("(--strict stops at the first loss)") != std::string::npos);
+  REQUIRE(stopped.pipeline_report.error);
+  CHECK(stopped.pipeline_report.error->message.find("damaged.ts: an access unit of camera") != std::string::npos);
+  CHECK(stopped.pipeline_report.error->message.find("(--strict stops at the first loss)") != std::string::npos);
   // Everything before the loss was estimated: the frames up to the cut, none after it.
   CHECK(stopped.trajectory.poses.size() > 0);
   CHECK(static_cast<std::int64_t>(stopped.trajectory.poses.size()) + skipped.source.frames_lost < n);

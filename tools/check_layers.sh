@@ -2,12 +2,15 @@
 # Checks that the layers include only downwards (README: folders are the data flow). Every target
 # gets the project root as include path, so the compiler cannot stop voca/ from including a driver
 # by accident; this check does. The rules (a layer must not include the folders listed after it):
-#   voca/     -> formats/ drivers/ pipeline/ tools/ platform/   (pure algorithms: no files, devices,
-#                                                              threads, OS)
-#   formats/  -> drivers/ pipeline/ tools/   (file readers and writers on top of voca/'s types)
-#   drivers/  -> pipeline/ tools/
-#   pipeline/ -> tools/
-#   platform/ -> drivers/ pipeline/ tools/
+#   voca/     -> formats/ drivers/ pipeline/ api/ tools/ platform/   (pure algorithms: no files,
+#                                                                   devices, threads, OS)
+#   formats/  -> drivers/ pipeline/ api/ tools/   (file readers and writers on top of voca/'s types)
+#   drivers/  -> pipeline/ api/ tools/
+#   pipeline/ -> api/ tools/
+#   platform/ -> drivers/ pipeline/ api/ tools/
+#   api/      -> tools/   (the library API, above the pipeline; the command line is its user)
+#   api/include/ -> voca/ formats/ drivers/ pipeline/ platform/ api/ tools/   (public headers: only
+#                                                              voca_rt/ and the standard library)
 # Prints every violation as file:line and exits 1 if there is any; 2 on a usage error.
 #
 #   tools/check_layers.sh [source root]     (default: the repository this script is in)
@@ -20,11 +23,13 @@ if [[ $# -gt 1 || ! -d "$root" ]]; then
 fi
 cd "$root"
 
-rules=("voca:formats drivers pipeline tools platform"
-       "formats:drivers pipeline tools"
-       "drivers:pipeline tools"
-       "pipeline:tools"
-       "platform:drivers pipeline tools")
+rules=("voca:formats drivers pipeline api tools platform"
+       "formats:drivers pipeline api tools"
+       "drivers:pipeline api tools"
+       "pipeline:api tools"
+       "platform:drivers pipeline api tools"
+       "api:tools"
+       "api/include:voca formats drivers pipeline platform api tools")
 
 violations=0
 checked=0

@@ -1,5 +1,7 @@
 #include "drivers/capture/camera_source.h"
 
+#include <cmath>
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -13,6 +15,27 @@
 #include "voca/core/error.h"
 
 namespace voca::capture {
+
+StereoCameraOptions stereoCameraOptions(const CameraSettings& settings) {
+  StereoCameraOptions options;
+  options.devices = parseDeviceList(settings.devices);
+  if (!settings.size.empty()) parseFrameSize(settings.size, options.request.width, options.request.height);
+  if (!settings.pixel_format.empty()) options.request.fourcc = parseGrayConvertibleFormat(settings.pixel_format);
+  if (settings.fps < 0.0 || !std::isfinite(settings.fps))
+    throw InputError(fmt::format("--fps: expected a positive rate, got {}", settings.fps));
+  options.request.rate_hz = settings.fps;
+  if (settings.exposure >= 0) options.request.controls.exposure = settings.exposure;
+  if (settings.gain >= 0) options.request.controls.gain = settings.gain;
+  if (settings.pair_tolerance_ms < 0.0 || !std::isfinite(settings.pair_tolerance_ms))
+    throw InputError("--pair-tolerance: expected a positive number of milliseconds");
+  options.pair_tolerance_ns = static_cast<std::int64_t>(std::llround(settings.pair_tolerance_ms * 1e6));
+  if (settings.buffers < 2 || settings.buffers > 32)
+    throw InputError(fmt::format("--buffers: expected 2 to 32, got {}", settings.buffers));
+  options.request.buffers = settings.buffers;
+  if (settings.frames < 0) throw InputError("--frames: expected 0 (until stopped) or a positive count");
+  options.max_frames = settings.frames;
+  return options;
+}
 
 namespace {
 // poll() slices: an interrupt is seen within this long.

@@ -26,6 +26,23 @@ struct StereoCameraOptions {
   std::int64_t max_frames = 0;         // stereo frames to deliver before next() returns false; 0: until stopped
 };
 
+// The cameras as people and programs name them (`voca live --camera ... --size ...`, the library's
+// CameraInput).
+struct CameraSettings {
+  std::string devices;       // "LEFT,RIGHT" or one side-by-side device
+  std::string size;          // "640x480"; empty: the device's current size
+  std::string pixel_format;  // GREY, Y10, Y16, YUYV or NV12; empty: the first the device offers
+  double fps = 0.0;          // 0: the device's current rate
+  int exposure = -1;         // -1: automatic
+  int gain = -1;             // -1: automatic
+  double pair_tolerance_ms = 0.0;
+  int buffers = 4;
+  std::int64_t frames = 0;  // 0: until stopped
+};
+
+// Checks the settings (InputError naming the command-line option) and turns them into options.
+StereoCameraOptions stereoCameraOptions(const CameraSettings& settings);
+
 // Parses "640x480" (--size). InputError naming the option otherwise.
 void parseFrameSize(std::string_view text, int& width, int& height);
 

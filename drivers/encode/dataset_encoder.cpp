@@ -17,6 +17,7 @@
 #include "formats/image/png_io.h"
 #include "formats/trajectory/trajectory_io.h"
 #include "platform/filesystem/output_paths.h"
+#include "platform/terminal/progress_line.h"
 #include "voca/core/error.h"
 
 namespace voca::encode {
@@ -342,6 +343,30 @@ DatasetEncodeReport encodeDataset(const fs::path& input, const fs::path& out, co
     return stopped;
   }
   return report;
+}
+
+DatasetEncodeProgress progressOnLine(platform::ProgressLine& line) {
+  return [&line, last_percent = -1](int camera, int pass, int passes, int frame, int frames) mutable {
+    const int percent = 100 * (frame + 1) / frames;
+    if (percent == last_percent && frame + 1 != frames) return;
+    last_percent = percent;
+    line.update("cam{} pass {}/{}: frame {}/{} ({}%)", camera, pass, passes, frame + 1, frames, percent);
+    if (frame + 1 == frames) line.end();
+  };
+}
+
+bool encodeForReplay(const fs::path& input, const fs::path& out, std::int64_t bitrate_bps,
+                     const std::optional<fs::path>& calibration, bool progress,
+                     const std::function<bool()>& stop_requested) {
+  DatasetEncodeOptions options;
+  options.settings.bitrate_bps = bitrate_bps;
+  options.calibration = calibration;
+  options.stop_requested = stop_requested;
+  silenceCodecLogs();
+  // Ended by its destructor, also when an exception leaves: the caller's message starts a line.
+  platform::ProgressLine line;
+  const DatasetEncodeReport report = encodeDataset(input, out, options, progress ? progressOnLine(line) : nullptr);
+  return !report.stopped;
 }
 
 }  // namespace voca::encode

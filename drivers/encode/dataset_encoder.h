@@ -12,6 +12,10 @@
 #include "drivers/encode/video_encoder.h"
 #include "formats/dataset/dataset.h"
 
+namespace voca::platform {
+class ProgressLine;
+}
+
 namespace voca::encode {
 
 // What to encode and how.
@@ -80,5 +84,17 @@ void datasetFrameRate(const Dataset& dataset, int& fps_num, int& fps_den);
 DatasetEncodeReport encodeDataset(const std::filesystem::path& input, const std::filesystem::path& out,
                                   const DatasetEncodeOptions& options, const DatasetEncodeProgress& progress = {},
                                   const DatasetEncodeWarning& warn = {});
+
+// The progress of encodeDataset on a progress line: "cam0 pass 1/2: frame 120/800 (15%)", updated
+// at each whole percent and ended after each camera's last pass.
+DatasetEncodeProgress progressOnLine(platform::ProgressLine& line);
+
+// Encodes a raw dataset the way the paper did (two-pass libx264 at bitrate_bps with its x264 options)
+// into a VOCA video folder at out, for a run that replays it: `voca run --encode`, the benches and
+// the evaluation harness. Progress goes to stderr when asked. Returns false, having written nothing,
+// when stop_requested() turns true first; throws as encodeDataset does.
+bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
+                     const std::optional<std::filesystem::path>& calibration, bool progress,
+                     const std::function<bool()>& stop_requested);
 
 }  // namespace voca::encode

@@ -20,7 +20,7 @@ VideoFolderWriter::VideoFolderWriter(const fs::path& out, int width, int height,
   std::optional<StereoRig> rig;
   if (calibration) {
     rig = loadCalibration(*calibration);
-    if (rig->cameras.size() < 2) throw InputError(fmt::format("{}: need a stereo calibration", calibration->string()));
+    rig->requireStereo();
     for (std::size_t c = 0; c < 2; ++c) {
       const CameraCalibration& camera = rig->cameras[c];
       if (camera.width != width || camera.height != height) {

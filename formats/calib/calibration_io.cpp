@@ -81,10 +81,7 @@ StereoRig readCalibration(const fs::path& path) {
                    "calib.txt, or a dataset folder");
 }
 
-}  // namespace
-
-StereoRig loadCalibration(const fs::path& path) {
-  StereoRig rig = readCalibration(path);
+void requireBaseline(const StereoRig& rig) {
   const double baseline = rig.baselineM();
   if (!(baseline >= kMinBaselineM)) {
     throw InputError(fmt::format(
@@ -92,6 +89,47 @@ StereoRig loadCalibration(const fs::path& path) {
         "poses the same, or is the translation in the wrong unit?)",
         rig.source, baseline * 1e3, kMinBaselineM * 1e3));
   }
+}
+
+}  // namespace
+
+StereoRig loadCalibration(const fs::path& path) {
+  StereoRig rig = readCalibration(path);
+  requireBaseline(rig);
+  return rig;
+}
+
+StereoRig stereoRigFromValues(const std::vector<CameraValues>& cameras, const std::string& source) {
+  StereoRig rig;
+  rig.source = source;
+  rig.body_frame = "body";
+  if (static_cast<int>(cameras.size()) < calib_internal::kMinCameras) {
+    throw InputError(fmt::format("{}: a stereo rig needs at least {} cameras, got {}", source,
+                                 calib_internal::kMinCameras, cameras.size()));
+  }
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    const CameraValues& values = cameras[i];
+    const std::string what = fmt::format("{}: cam{}", source, i);
+    CameraCalibration camera;
+    try {
+      camera.camera = GenericCamera<double>::fromParams(values.model, values.params);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", what, e.what()));
+    }
+    if (values.width <= 0 || values.height <= 0 || values.width > calib_internal::kMaxImageSide ||
+        values.height > calib_internal::kMaxImageSide) {
+      throw InputError(fmt::format("{}: image size {}x{}: expected 1 to {} pixels a side", what, values.width,
+                                   values.height, calib_internal::kMaxImageSide));
+    }
+    camera.width = values.width;
+    camera.height = values.height;
+    if (const std::string problem = calib_internal::rigidTransformProblem(values.T_body_cam); !problem.empty()) {
+      throw InputError(fmt::format("{}: T_body_cam: {}", what, problem));
+    }
+    camera.T_body_cam = calib_internal::toSE3(values.T_body_cam);
+    rig.cameras.push_back(camera);
+  }
+  requireBaseline(rig);
   return rig;
 }
 

@@ -2,8 +2,11 @@
 // Calibration files: Basalt JSON, Kalibr camchain YAML, EuRoC sensor.yaml folders and KITTI
 // calib.txt read into a StereoRig, and the rig written back as Basalt JSON.
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "voca/calib/calibration.h"
 
@@ -19,6 +22,18 @@ namespace voca {
 //                          sequence folder (calib.txt), or a folder with a *calib*.json
 // Throws InputError naming the file and the field, e.g. "calib.json: value0.intrinsics[1].intrinsics.fx: missing".
 StereoRig loadCalibration(const std::filesystem::path& path);
+
+// One camera as a program gives it (the library API's calibration value).
+struct CameraValues {
+  std::string model;           // Basalt name: pinhole, pinhole-radtan8, kb4, ds, eucm
+  std::vector<double> params;  // in Basalt order
+  int width = 0, height = 0;
+  Eigen::Matrix4d T_body_cam = Eigen::Matrix4d::Identity();
+};
+
+// A rig from values, checked as the file readers check theirs (the model and its parameters, image
+// sizes, rigid poses, two cameras, a baseline). Throws InputError naming `source` and the camera.
+StereoRig stereoRigFromValues(const std::vector<CameraValues>& cameras, const std::string& source);
 
 StereoRig loadBasaltCalibration(const std::filesystem::path& json_file);
 StereoRig loadKalibrCalibration(const std::filesystem::path& camchain_yaml);

@@ -28,14 +28,11 @@ TrajectoryWriter::~TrajectoryWriter() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
-void TrajectoryWriter::append(const TimedPose& pose) {
-  if (file_ == nullptr) throw InputError(fmt::format("trajectory file {} is closed", path_.string()));
+void formatTrajectoryRow(const TimedPose& pose, TrajectoryFormat format, fmt::memory_buffer& row) {
   const Eigen::Vector3d& p = pose.T_world_body.translation();
   const Eigen::Quaterniond& q = pose.T_world_body.unitQuaternion();
-  // A row is at most ~300 characters, within the buffer's inline storage: no allocation.
-  fmt::memory_buffer row;
   auto out = std::back_inserter(row);
-  switch (format_) {
+  switch (format) {
     case TrajectoryFormat::kTum: {
       // Seconds with exactly 9 decimals, so the nanosecond timestamp reads back unchanged; fmt's "{}"
       // is the shortest text that reads back to the same double.
@@ -58,6 +55,13 @@ void TrajectoryWriter::append(const TimedPose& pose) {
       break;
     }
   }
+}
+
+void TrajectoryWriter::append(const TimedPose& pose) {
+  if (file_ == nullptr) throw InputError(fmt::format("trajectory file {} is closed", path_.string()));
+  // A row is at most ~300 characters, within the buffer's inline storage: no allocation.
+  fmt::memory_buffer row;
+  formatTrajectoryRow(pose, format_, row);
   if (std::fwrite(row.data(), 1, row.size(), file_) != row.size() || std::fflush(file_) != 0) {
     throw InputError(fmt::format("error writing trajectory file {}", path_.string()));
   }

@@ -6,9 +6,15 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <fmt/format.h>
+
 #include "formats/trajectory/trajectory_io.h"
 
 namespace voca {
+
+// Appends one row of the format to `row` (a pose's line of the file, with its '\n'): what the
+// writer writes, for programs that print rows themselves.
+void formatTrajectoryRow(const TimedPose& pose, TrajectoryFormat format, fmt::memory_buffer& row);
 
 class TrajectoryWriter {
  public:

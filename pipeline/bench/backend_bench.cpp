@@ -32,7 +32,7 @@ std::optional<TrackRecording> recordFrontendTracks(VoRunOptions options) {
   options.keep_trajectory = false;
   options.extra_sinks.push_back(&recorder);
   const VoRunResult result = runVisualOdometry(options);
-  if (result.pipeline.error) throw RuntimeFailure(result.pipeline.error->message);
+  if (result.pipeline_report.error) throw RuntimeFailure(result.pipeline_report.error->message);
   if (result.stop_signal != 0) return std::nullopt;
   recording.rig = result.rig;
   recording.config = result.config;

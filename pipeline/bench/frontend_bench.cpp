@@ -15,14 +15,14 @@ FrontendTimingOutcome timeFrontend(VoRunOptions options, int repeat, const std::
   if (repeat < 1) throw InputError(fmt::format("repeat {}: the frontend must be timed at least once", repeat));
   options.estimate = false;
   options.progress = false;
-  options.pipeline.threads = 1;
+  options.pipeline_options.threads = 1;
   FrontendTimingOutcome outcome;
   FrontendTiming& timing = outcome.timing;
   std::vector<std::vector<double>> run_cpu_ms, run_wall_ms;
   std::vector<FrameRecord> first_rows;
   for (int run = 0; run < repeat; ++run) {
     VoRunResult result = runVisualOdometry(options);
-    if (result.pipeline.error || result.stop_signal != 0) {
+    if (result.pipeline_report.error || result.stop_signal != 0) {
       outcome.ended_early = std::move(result);
       return outcome;
     }

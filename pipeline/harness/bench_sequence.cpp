@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 
+#include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "pipeline/synth/synth_runner.h"
 #include "pipeline/vo/vo_runner.h"
@@ -81,7 +82,7 @@ std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const
                video.string());
   }
   if (!render(spec, raw, progress, stop_requested)) return std::nullopt;
-  if (!pipeline::encodeForReplay(raw, partial, spec.bitrate_bps, std::nullopt, progress, stop_requested)) {
+  if (!encode::encodeForReplay(raw, partial, spec.bitrate_bps, std::nullopt, progress, stop_requested)) {
     return std::nullopt;
   }
   // The encoding keeps the ground truth; the rendering (hundreds of MB of PNG) is not needed again.

@@ -295,32 +295,39 @@ RunReport readTraceReport(const std::filesystem::path& path, bool* complete) {
   return report;
 }
 
-void printLatencyReport(const RunReport& r, std::FILE* out) {
+std::string formatLatencyReport(const RunReport& r) {
+  std::string text;
+  auto out = std::back_inserter(text);
   const auto ms = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-6; };
-  fmt::print(out, "latency per stage over {} frames ({} thread{}), ms:\n", r.completed, r.threads,
-             r.threads == 1 ? "" : "s");
-  fmt::print(out, "  {:<10} {:>7} {:>7} {:>7} {:>7}   {:>7} {:>7} {:>7}   {:>6} {:>5} {:>7} {:>7}\n", "stage", "p50",
-             "p90", "p99", "max", "wait50", "wait99", "cpu50", "thread", "core", "queue", "dropped");
+  fmt::format_to(out, "latency per stage over {} frames ({} thread{}), ms:\n", r.completed, r.threads,
+                 r.threads == 1 ? "" : "s");
+  fmt::format_to(out, "  {:<10} {:>7} {:>7} {:>7} {:>7}   {:>7} {:>7} {:>7}   {:>6} {:>5} {:>7} {:>7}\n", "stage",
+                 "p50", "p90", "p99", "max", "wait50", "wait99", "cpu50", "thread", "core", "queue", "dropped");
   for (const StageReport& s : r.stages) {
-    fmt::print(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   {:7.3f} {:7.3f} {:7.3f}   {:>6} {:>5} {:>7} {:>7}\n",
-               s.name, ms(s.service.quantileNs(0.5)), ms(s.service.quantileNs(0.9)), ms(s.service.quantileNs(0.99)),
-               ms(s.service.maxNs()), ms(s.wait.quantileNs(0.5)), ms(s.wait.quantileNs(0.99)),
-               ms(s.cpu.quantileNs(0.5)), s.thread, s.core < 0 ? std::string("-") : std::to_string(s.core),
-               s.queue_high_water, s.dropped + s.damaged);
+    fmt::format_to(
+        out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   {:7.3f} {:7.3f} {:7.3f}   {:>6} {:>5} {:>7} {:>7}\n", s.name,
+        ms(s.service.quantileNs(0.5)), ms(s.service.quantileNs(0.9)), ms(s.service.quantileNs(0.99)),
+        ms(s.service.maxNs()), ms(s.wait.quantileNs(0.5)), ms(s.wait.quantileNs(0.99)), ms(s.cpu.quantileNs(0.5)),
+        s.thread, s.core < 0 ? std::string("-") : std::to_string(s.core), s.queue_high_water, s.dropped + s.damaged);
     if (s.helper_service.count() > 0) {
       // The stage's helper thread, its part of each frame (it has no queue: the stage waits for it).
-      fmt::print(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   {:>7} {:>7} {:7.3f}   {:>6} {:>5}\n", "+ helper",
-                 ms(s.helper_service.quantileNs(0.5)), ms(s.helper_service.quantileNs(0.9)),
-                 ms(s.helper_service.quantileNs(0.99)), ms(s.helper_service.maxNs()), "", "",
-                 ms(s.helper_cpu.quantileNs(0.5)), s.thread,
-                 s.helper_core < 0 ? std::string("-") : std::to_string(s.helper_core));
+      fmt::format_to(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   {:>7} {:>7} {:7.3f}   {:>6} {:>5}\n", "+ helper",
+                     ms(s.helper_service.quantileNs(0.5)), ms(s.helper_service.quantileNs(0.9)),
+                     ms(s.helper_service.quantileNs(0.99)), ms(s.helper_service.maxNs()), "", "",
+                     ms(s.helper_cpu.quantileNs(0.5)), s.thread,
+                     s.helper_core < 0 ? std::string("-") : std::to_string(s.helper_core));
     }
   }
   const LatencyHistogram& e = r.end_to_end;
-  fmt::print(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   (arrival to the end of the last stage)\n", "end-to-end",
-             ms(e.quantileNs(0.5)), ms(e.quantileNs(0.9)), ms(e.quantileNs(0.99)), ms(e.maxNs()));
-  fmt::print(out, "frames: {} completed, {} dropped (live policy), {} damaged (skipped)\n", r.completed, r.dropped,
-             r.damaged);
+  fmt::format_to(out, "  {:<10} {:7.3f} {:7.3f} {:7.3f} {:7.3f}   (arrival to the end of the last stage)\n",
+                 "end-to-end", ms(e.quantileNs(0.5)), ms(e.quantileNs(0.9)), ms(e.quantileNs(0.99)), ms(e.maxNs()));
+  fmt::format_to(out, "frames: {} completed, {} dropped (live policy), {} damaged (skipped)\n", r.completed, r.dropped,
+                 r.damaged);
+  return text;
+}
+
+void printLatencyReport(const RunReport& report, std::FILE* out) {
+  std::fputs(formatLatencyReport(report).c_str(), out);
 }
 
 }  // namespace voca::pipeline

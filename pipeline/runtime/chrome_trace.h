@@ -53,6 +53,7 @@ class ChromeTraceWriter {
 RunReport readTraceReport(const std::filesystem::path& path, bool* complete = nullptr);
 
 // p50/p90/p99/max per stage and end to end, queue high-water marks, drops: the `--profile` table.
+std::string formatLatencyReport(const RunReport& report);
 void printLatencyReport(const RunReport& report, std::FILE* out);
 
 }  // namespace voca::pipeline

@@ -463,6 +463,8 @@ Pipeline::Pipeline(SourceStage& source, std::vector<Stage*> stages, PipelineOpti
 
 Pipeline::~Pipeline() = default;
 
+bool Pipeline::failed() const { return impl_->aborting(); }
+
 RunReport Pipeline::run() {
   Impl& d = *impl_;
   const std::int64_t start = platform::monotonicNs();

@@ -119,6 +119,9 @@ class Pipeline {
   // finished. Call once.
   RunReport run();
 
+  // True once a stage failed (any thread, while run() goes on).
+  bool failed() const;
+
   // Which thread (group) each stage runs on, source first.
   const std::vector<int>& threadOfStage() const { return group_of_; }
 

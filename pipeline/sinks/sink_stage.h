@@ -8,11 +8,19 @@
 
 namespace voca::pipeline {
 
-// A consumer of finished frames. consume() is called once per frame in order; finish() once at the
-// end (also after a stop or a failure), and writes what the sink still holds.
+// Where each stage sits in the pipeline (the source is 0): the index of its StageTiming in a
+// FrameSlot. -1 for a stage the run does not have.
+struct StagePositions {
+  int encode = -1, decode = -1, frontend = -1, backend = -1, write = -1;
+};
+
+// A consumer of finished frames. begin() is called once before the first frame with where the stages
+// are; consume() once per frame in order; finish() once at the end (also after a stop or a failure),
+// and writes what the sink still holds.
 class FrameSink {
  public:
   virtual ~FrameSink() = default;
+  virtual void begin(const StagePositions& /*positions*/) {}
   virtual void consume(const FrameSlot& slot) = 0;
   virtual void finish() {}
 };

@@ -50,7 +50,7 @@ StereoRig loadRig(const std::string& camera) {
                      "EuRoC mav0, KITTI calib.txt)");
   }
   StereoRig rig = loadCalibration(camera);
-  if (rig.cameras.size() < 2) throw InputError(camera + ": a stereo calibration needs two cameras");
+  rig.requireStereo();
   rig.cameras.resize(2);
   for (const CameraCalibration& c : rig.cameras) {
     if (c.width <= 0 || c.height <= 0) throw InputError(camera + ": camera resolution missing or invalid");

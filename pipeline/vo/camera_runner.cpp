@@ -49,9 +49,7 @@ std::unique_ptr<StereoSource> openCameras(const capture::StereoCameraOptions& op
 VoRunResult runVisualOdometryOnCameras(const CameraRunOptions& options, platform::V4l2Io& io) {
   // Calibration and config first: a typo there should not wait for the cameras to open.
   const StereoRig rig = loadCalibration(options.calibration);
-  if (rig.cameras.size() < 2) {
-    throw InputError(fmt::format("{}: need a stereo calibration", options.calibration.string()));
-  }
+  rig.requireStereo();
   const RunConfig config = resolveRunConfig(options.config);
   const std::unique_ptr<StereoSource> source = openCameras(options.cameras, io);
   VoRunResult result = runVisualOdometryOn(*source, rig, config.config, options.run);

@@ -13,6 +13,7 @@
 #include <numeric>
 #include <thread>
 
+#include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "pipeline/bench/frontend_bench.h"
@@ -74,8 +75,8 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
     encoded.emplace("voca-bench");
     const std::optional<std::filesystem::path> calibration =
         opts.calib.empty() ? std::nullopt : std::optional<std::filesystem::path>(opts.calib);
-    if (!pipeline::encodeForReplay(input, encoded->path(), encode::parseBitrate(opts.bitrate), calibration, true,
-                                   platform::stopRequested)) {
+    if (!encode::encodeForReplay(input, encoded->path(), encode::parseBitrate(opts.bitrate), calibration, true,
+                                 platform::stopRequested)) {
       return platform::interruptedExitCode(platform::stopSignal());
     }
     input = encoded->path();

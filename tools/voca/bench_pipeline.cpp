@@ -10,6 +10,7 @@
 #include <memory>
 #include <thread>
 
+#include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "pipeline/runtime/chrome_trace.h"
@@ -22,6 +23,7 @@
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
 #include "voca/core/quantile.h"
+#include "voca_rt/run.h"
 
 namespace voca::cli {
 
@@ -65,25 +67,26 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
   std::optional<TempDir> encoded;
   if (openDataset(input).layout != DatasetLayout::kVocaVideo) {
     encoded.emplace("voca-bench");
-    if (!pipeline::encodeForReplay(input, encoded->path(), encode::parseBitrate(opts.bitrate), std::nullopt, true,
-                                   platform::stopRequested)) {
+    if (!encode::encodeForReplay(input, encoded->path(), encode::parseBitrate(opts.bitrate), std::nullopt, true,
+                                 platform::stopRequested)) {
       return platform::interruptedExitCode(platform::stopSignal());
     }
     input = encoded->path();
   }
+  // Through the library API, as a program would run it (the same staged pipeline as `voca run`).
   const auto makeOptions = [&](int threads, int camera_threads) {
-    pipeline::VoRunOptions options;
-    options.input = input;
-    if (!opts.config.empty()) options.config = opts.config;
-    if (!opts.mode.empty()) options.mode = requirePriorMode(opts.mode, "--mode");
-    options.max_frames = opts.frames;
-    options.decoder = decode::parseDecoderKind(opts.decoder);
-    options.progress = false;
-    options.keep_trajectory = false;
-    options.pipeline.threads = threads;
-    options.frontend_camera_threads = camera_threads;
+    voca_rt::Options options;
+    options.config = opts.config;
+    options.mode = opts.mode;
+    options.decoder = opts.decoder;
+    options.threads = threads;
+    options.frontend_threads = camera_threads;
+    options.stop_requested = platform::stopRequested;
     return options;
   };
+  voca_rt::Input source;
+  source.path = input.string();
+  source.max_frames = opts.frames;
 
   fmt::print("machine: {} cores available to this process\n", platform::availableCores());
   struct Layout {
@@ -92,7 +95,7 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
     int camera_threads;
     std::vector<double> fps;
     double rss = 0.0;
-    pipeline::VoRunResult last;
+    voca_rt::Summary last;
   };
   std::vector<Layout> layouts = {{"1 thread", 1, 1, {}, 0.0, {}},
                                  {"staged (one thread per stage)", 0, 1, {}, 0.0, {}},
@@ -101,24 +104,22 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
   for (int r = 0; r < opts.repeat; ++r) {
     for (Layout& layout : layouts) {
       resetPeakRss();
-      layout.last = pipeline::runVisualOdometry(makeOptions(layout.threads, layout.camera_threads));
-      if (layout.last.pipeline.error || layout.last.stop_signal != 0) {
+      layout.last = voca_rt::run(source, makeOptions(layout.threads, layout.camera_threads));
+      if (!layout.last.error.empty() || layout.last.stop_signal != 0) {
         progress.end();
         return reportRunEnd(layout.last, PipelineCli{}, "bench");
       }
       layout.rss = std::max(layout.rss, peakRssMiB());
-      const pipeline::RunReport& p = layout.last.pipeline;
-      layout.fps.push_back(static_cast<double>(p.completed) / p.wall_s);
+      layout.fps.push_back(layout.last.frames_per_second);
       progress.update("{} run {}/{}: {:.1f} frames/s", layout.label, r + 1, opts.repeat, layout.fps.back());
     }
   }
   progress.end();
-  fmt::print("input: {}\n", layouts[0].last.description);
+  fmt::print("input: {}\n", layouts[0].last.input);
   fmt::print("offline throughput, decode included (median of {} runs, wall clock):\n", opts.repeat);
   for (const Layout& layout : layouts) {
     fmt::print("  {:<32} {:7.1f} stereo frames/s  ({} threads; peak RSS {:.0f} MiB)\n", layout.label,
-               voca::median(layout.fps), layout.last.pipeline.threads + layout.last.frontend_camera_threads - 1,
-               layout.rss);
+               voca::median(layout.fps), layout.last.threads, layout.rss);
   }
   const double single = std::max(voca::median(layouts[0].fps), 1e-9);
   fmt::print(
@@ -126,22 +127,20 @@ int runPipelineBench(const PipelineBenchOptions& opts) {
       "frames/s with faster stages)\n",
       voca::median(layouts[1].fps) / single, voca::median(layouts[2].fps) / single);
   fmt::print("where the time goes, staged run with the frontend on 2 threads (service time per stage):\n");
-  printLatencyReport(layouts[2].last.pipeline, stdout);
+  std::fputs(layouts[2].last.latency_report.c_str(), stdout);
 
   if (!opts.skip_realtime) {
-    pipeline::VoRunOptions options = makeOptions(0, 0);
-    options.realtime = true;
+    voca_rt::Input paced = source;
+    paced.realtime = true;
     resetPeakRss();
-    const pipeline::VoRunResult live = pipeline::runVisualOdometry(options);
-    if (live.pipeline.error || live.stop_signal != 0) return reportRunEnd(live, PipelineCli{}, "bench");
-    const pipeline::LatencyHistogram& e = live.pipeline.end_to_end;
+    const voca_rt::Summary live = voca_rt::run(paced, makeOptions(0, 0));
+    if (!live.error.empty() || live.stop_signal != 0) return reportRunEnd(live, PipelineCli{}, "bench");
+    const std::array<double, 4>& e = live.end_to_end_ms;
     fmt::print("at the recording's real rate (--realtime), {} frames, peak RSS {:.0f} MiB (target <= 100):\n",
-               live.pipeline.completed, peakRssMiB());
+               live.frames, peakRssMiB());
     fmt::print("  arrival to pose written: p50 {:.2f} ms, p90 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms; {} dropped\n",
-               static_cast<double>(e.quantileNs(0.5)) * 1e-6, static_cast<double>(e.quantileNs(0.9)) * 1e-6,
-               static_cast<double>(e.quantileNs(0.99)) * 1e-6, static_cast<double>(e.maxNs()) * 1e-6,
-               live.pipeline.dropped);
-    printLatencyReport(live.pipeline, stdout);
+               e[0], e[1], e[2], e[3], live.dropped);
+    std::fputs(live.latency_report.c_str(), stdout);
   }
   return 0;
 }

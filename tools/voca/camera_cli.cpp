@@ -2,9 +2,6 @@
 
 #include <fmt/core.h>
 
-#include <cmath>
-
-#include "drivers/capture/pixel_format.h"
 #include "voca/core/error.h"
 
 namespace voca::cli {
@@ -30,25 +27,7 @@ void addCameraOptions(CLI::App& app, CameraCli& cli) {
   app.add_option("--frames", cli.frames, "Stop after N stereo frames (0 = until Ctrl-C)")->capture_default_str();
 }
 
-capture::StereoCameraOptions applyCameraOptions(const CameraCli& cli) {
-  capture::StereoCameraOptions options;
-  options.devices = capture::parseDeviceList(cli.devices);
-  if (!cli.size.empty()) capture::parseFrameSize(cli.size, options.request.width, options.request.height);
-  if (!cli.pixel_format.empty()) options.request.fourcc = capture::parseGrayConvertibleFormat(cli.pixel_format);
-  if (cli.fps < 0.0 || !std::isfinite(cli.fps))
-    throw InputError(fmt::format("--fps: expected a positive rate, got {}", cli.fps));
-  options.request.rate_hz = cli.fps;
-  if (cli.exposure >= 0) options.request.controls.exposure = cli.exposure;
-  if (cli.gain >= 0) options.request.controls.gain = cli.gain;
-  if (cli.pair_tolerance_ms < 0.0) throw InputError("--pair-tolerance: expected a positive number of milliseconds");
-  options.pair_tolerance_ns = static_cast<std::int64_t>(std::llround(cli.pair_tolerance_ms * 1e6));
-  if (cli.buffers < 2 || cli.buffers > 32)
-    throw InputError(fmt::format("--buffers: expected 2 to 32, got {}", cli.buffers));
-  options.request.buffers = cli.buffers;
-  if (cli.frames < 0) throw InputError("--frames: expected 0 (until stopped) or a positive count");
-  options.max_frames = cli.frames;
-  return options;
-}
+capture::StereoCameraOptions applyCameraOptions(const CameraCli& cli) { return capture::stereoCameraOptions(cli); }
 
 std::string cameraHelpFooter() {
   return "Cameras: any V4L2 capture device (UVC webcams, sensor drivers); formats are converted to 8-bit gray.\n"

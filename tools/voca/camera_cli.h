@@ -9,17 +9,7 @@
 
 namespace voca::cli {
 
-struct CameraCli {
-  std::string devices;
-  std::string size;
-  std::string pixel_format;
-  double fps = 0.0;
-  int exposure = -1;
-  int gain = -1;
-  double pair_tolerance_ms = 0.0;
-  int buffers = 4;
-  std::int64_t frames = 0;
-};
+using CameraCli = capture::CameraSettings;
 
 void addCameraOptions(CLI::App& app, CameraCli& cli);
 

@@ -150,7 +150,7 @@ int runDemo(const DemoOptions& o) {
     v.trajectory = out / fmt::format("traj_{}.txt", voca::priorModeName(v.mode));
     options.trajectory_file = v.trajectory;
     v.result = voca::pipeline::runVisualOdometry(options);
-    if (v.result.pipeline.error || v.result.stop_signal != 0) {
+    if (v.result.pipeline_report.error || v.result.stop_signal != 0) {
       voca::cli::PipelineCli defaults;
       return voca::cli::reportRunEnd(v.result, defaults, "demo");
     }
@@ -164,7 +164,7 @@ int runDemo(const DemoOptions& o) {
   }
 
   const auto stageMedianMs = [](const voca::pipeline::VoRunResult& r, std::string_view stage) {
-    for (const voca::pipeline::StageReport& s : r.pipeline.stages) {
+    for (const voca::pipeline::StageReport& s : r.pipeline_report.stages) {
       if (s.name == stage) return static_cast<double>(s.service.quantileNs(0.5)) * 1e-6;
     }
     return 0.0;

@@ -111,18 +111,10 @@ int runEncode(const EncodeOptions& cli) {
   options.stop_requested = voca::platform::stopRequested;
 
   const auto start = std::chrono::steady_clock::now();
-  int last_percent = -1;
   voca::platform::ProgressLine progress;
-  const DatasetEncodeReport report = encodeDataset(
-      cli.dataset, cli.out, options,
-      [&](int camera, int pass, int passes, int frame, int frames) {
-        const int percent = 100 * (frame + 1) / frames;
-        if (percent == last_percent && frame + 1 != frames) return;
-        last_percent = percent;
-        progress.update("cam{} pass {}/{}: frame {}/{} ({}%)", camera, pass, passes, frame + 1, frames, percent);
-        if (frame + 1 == frames) progress.end();
-      },
-      [&](const std::string& warning) { progress.message("warning: {}", warning); });
+  const DatasetEncodeReport report =
+      encodeDataset(cli.dataset, cli.out, options, voca::encode::progressOnLine(progress),
+                    [&](const std::string& warning) { progress.message("warning: {}", warning); });
   if (report.stopped) {
     progress.end();
     const bool existed = std::filesystem::exists(std::filesystem::path(cli.out) / "mav0");

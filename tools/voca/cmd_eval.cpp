@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "formats/calib/calibration_io.h"
+#include "formats/eval/eval_inputs.h"
 #include "formats/eval/eval_report_json.h"
 #include "formats/trajectory/trajectory_io.h"
 #include "platform/filesystem/output_paths.h"
@@ -40,44 +40,7 @@ struct EvalCommandOptions {
 };
 
 // A trajectory file as given on the command line, with what was decided about it.
-struct LoadedTrajectory {
-  voca::Trajectory trajectory;
-  voca::TrajectoryFormat format;
-  std::string frame;  // "body" or "cam0"
-};
-
-LoadedTrajectory loadInput(const std::string& path, const std::string& format_name, const std::string& times,
-                           const std::string& frame) {
-  LoadedTrajectory loaded;
-  if (format_name == "auto") {
-    loaded.format = voca::detectTrajectoryFormat(path);
-  } else {
-    loaded.format = *voca::parseTrajectoryFormat(format_name);  // CLI11 checked the choice
-  }
-  loaded.trajectory = voca::loadTrajectory(path, loaded.format, times);
-  // KITTI poses are cam0 poses (the odometry benchmark's convention); our own outputs and EuRoC
-  // ground truth are body poses.
-  loaded.frame = frame != "auto" ? frame : (loaded.format == voca::TrajectoryFormat::kKitti ? "cam0" : "body");
-  return loaded;
-}
-
-// Brings the estimate into the ground truth's body frame.
-void matchFrames(LoadedTrajectory& est, const LoadedTrajectory& gt, const std::string& calib_path) {
-  if (est.frame == gt.frame) return;
-  if (calib_path.empty()) {
-    throw voca::InputError(fmt::format(
-        "the estimate is in the {} frame and the ground truth in the {} frame: give --calib so the estimate can be "
-        "converted (or --est-frame/--gt-frame if they are really the same)",
-        est.frame, gt.frame));
-  }
-  const voca::StereoRig rig = voca::loadCalibration(calib_path);
-  if (rig.cameras.empty()) throw voca::InputError(fmt::format("{} has no cameras", calib_path));
-  const auto frame = [](const std::string& name) {
-    return name == "cam0" ? voca::PoseFrame::kCam0 : voca::PoseFrame::kBody;
-  };
-  est.trajectory = voca::convertPoseFrame(est.trajectory, frame(est.frame), frame(gt.frame), rig.cameras[0].T_body_cam);
-  est.frame = gt.frame;
-}
+using LoadedTrajectory = voca::EvalInput;
 
 std::string verdictText(voca::EvalVerdict verdict, bool available, double threshold_m,
                         const std::optional<double>& coverage) {
@@ -154,9 +117,9 @@ int runEval(const EvalCommandOptions& cli) {
   }
   voca::requireOutputsApart({&report_file, 1}, inputs);
   voca::requireWritableFile(report_file);  // before the evaluation, not after its report is printed
-  LoadedTrajectory gt = loadInput(cli.gt_path, cli.gt_format, cli.gt_times, cli.gt_frame);
-  LoadedTrajectory est = loadInput(cli.est_path, cli.est_format, cli.est_times, cli.est_frame);
-  matchFrames(est, gt, cli.calib_path);
+  LoadedTrajectory gt = voca::loadEvalInput(cli.gt_path, cli.gt_format, cli.gt_times, cli.gt_frame);
+  LoadedTrajectory est = voca::loadEvalInput(cli.est_path, cli.est_format, cli.est_times, cli.est_frame);
+  voca::matchPoseFrames(est, gt, cli.calib_path);
 
   voca::EvalOptions options;
   options.max_diff_s = cli.max_diff_s;

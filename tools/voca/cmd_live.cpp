@@ -6,12 +6,12 @@
 #include <memory>
 #include <string>
 
-#include "pipeline/vo/camera_runner.h"
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
+#include "voca_rt/run.h"
 
 namespace {
 
@@ -26,25 +26,30 @@ struct LiveOptions {
 };
 
 int runLive(const LiveOptions& o) {
-  voca::pipeline::CameraRunOptions options;
-  options.cameras = voca::cli::applyCameraOptions(o.camera);
-  options.calibration = o.calib;
-  if (!o.config.empty()) options.config = o.config;
-  voca::pipeline::VoRunOptions& run = options.run;
-  if (!o.mode.empty()) run.mode = voca::requirePriorMode(o.mode, "--mode");
-  run.max_points = o.max_points;
-  run.estimate = !o.track_only;
-  const auto format = voca::parseTrajectoryFormat(o.format);
-  if (!format) throw voca::InputError(fmt::format("--format: expected tum, euroc or kitti, got \"{}\"", o.format));
-  run.trajectory_file = o.out;
-  run.trajectory_format = *format;
-  voca::cli::applyPipelineOptions(o.pipeline, run);
-  if (run.realtime) throw voca::InputError("--realtime: cameras are live already (it paces recorded input)");
+  if (o.pipeline.realtime) throw voca::InputError("--realtime: cameras are live already (it paces recorded input)");
+  voca_rt::Options options = voca::cli::apiOptions(o.pipeline);
+  options.calibration_file = o.calib;
+  options.config = o.config;
+  options.mode = o.mode;
+  options.max_points = o.max_points;
+  options.estimate = !o.track_only;
+  options.trajectory_file = o.out;
+  options.trajectory_format = o.format;
+  voca_rt::CameraInput cameras;
+  cameras.devices = o.camera.devices;
+  cameras.size = o.camera.size;
+  cameras.pixel_format = o.camera.pixel_format;
+  cameras.fps = o.camera.fps;
+  cameras.exposure = o.camera.exposure;
+  cameras.gain = o.camera.gain;
+  cameras.pair_tolerance_ms = o.camera.pair_tolerance_ms;
+  cameras.buffers = o.camera.buffers;
+  cameras.max_frames = o.camera.frames;
   voca::platform::installStopHandlers();
-  const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometryOnCameras(options);
-  voca::pipeline::printRunSummary(result, stdout);
+  const voca_rt::Summary summary = voca_rt::runCameras(cameras, options);
+  std::fputs(summary.report.c_str(), stdout);
   if (!o.out.empty()) fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
-  return voca::cli::reportRunEnd(result, o.pipeline, "live");
+  return voca::cli::reportRunEnd(summary, o.pipeline, "live");
 }
 
 const bool registered = voca::cli::registerCommand({

@@ -6,11 +6,11 @@
 #include <memory>
 #include <string>
 
-#include "drivers/encode/video_encoder.h"
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
 #include "voca/core/error.h"
+#include "voca_rt/run.h"
 
 namespace {
 
@@ -26,43 +26,35 @@ struct RunOptions {
 };
 
 int runRun(const RunOptions& o) {
-  voca::pipeline::VoRunOptions options;
-  options.input = o.input;
-  if (!o.calib.empty()) options.calibration = o.calib;
-  if (!o.config.empty()) options.config = o.config;
-  if (!o.gt.empty()) options.ground_truth = o.gt;
-  if (!o.mode.empty()) options.mode = voca::requirePriorMode(o.mode, "--mode");
+  voca_rt::Options options = voca::cli::apiOptions(o.pipeline);
+  options.calibration_file = o.calib;
+  options.config = o.config;
+  options.mode = o.mode;
   if (!o.bridge.empty()) options.bridge_iframes = o.bridge == "on";
-  if (!o.encode.empty()) options.encode_bitrate_bps = voca::encode::parseBitrate(o.encode);
-  if (o.frames < 0) throw voca::InputError("--frames: expected 0 (all) or a positive count");
-  options.max_frames = o.frames;
-  if (o.start_frame < 0) throw voca::InputError("--start-frame: expected 0 (the first frame) or a positive index");
-  options.first_frame = o.start_frame;
   options.max_points = o.max_points;
-  // A day at most: a deadline of inf or 1e300 s overflowed and ended the wait at once.
-  constexpr double kMaxWaitS = 86400.0;
-  if (!(o.stream_timeout > 0.0 && o.stream_timeout <= kMaxWaitS) ||
-      !(o.stream_wait > 0.0 && o.stream_wait <= kMaxWaitS)) {
-    throw voca::InputError("--stream-timeout and --stream-wait: expected seconds above 0 and at most 86400 (a day)");
-  }
-  options.stream_timeout_s = o.stream_timeout;
-  options.stream_start_timeout_s = o.stream_wait;
-  const auto format = voca::parseTrajectoryFormat(o.format);
-  if (!format) throw voca::InputError(fmt::format("--format: expected tum, euroc or kitti, got \"{}\"", o.format));
   if (o.out.empty()) throw voca::InputError("--out: an empty path; name the trajectory file to write");
   options.trajectory_file = o.out;
-  options.trajectory_format = *format;
-  voca::cli::applyPipelineOptions(o.pipeline, options);
+  options.trajectory_format = o.format;
+  voca_rt::Input input;
+  input.path = o.input;
+  input.ground_truth = o.gt;
+  input.encode_bitrate = o.encode;
+  input.first_frame = o.start_frame;
+  input.max_frames = o.frames;
+  input.realtime = o.pipeline.realtime;
+  input.speed = o.pipeline.speed;
+  input.stream_wait_s = o.stream_wait;
+  input.stream_timeout_s = o.stream_timeout;
   voca::platform::installStopHandlers();
-  const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
-  voca::pipeline::printRunSummary(result, stdout);
-  if (result.started) {
+  const voca_rt::Summary summary = voca_rt::run(input, options);
+  std::fputs(summary.report.c_str(), stdout);
+  if (summary.started) {
     fmt::print("trajectory: {} ({}, {})\n", o.out, o.format,
-               *format == voca::TrajectoryFormat::kKitti ? "left camera's poses" : "body frame of the calibration");
+               o.format == "kitti" ? "left camera's poses" : "body frame of the calibration");
   } else {
     fmt::print("trajectory: none written (stopped before the first frame)\n");
   }
-  return voca::cli::reportRunEnd(result, o.pipeline, "run");
+  return voca::cli::reportRunEnd(summary, o.pipeline, "run");
 }
 
 const bool registered = voca::cli::registerCommand({

@@ -55,7 +55,8 @@ int runTrack(const TrackOptions& opts) {
     }
   }
   voca::pipeline::printTrackSummary(result, result.config.frontend, stdout);
-  if (!opts.overlay.empty() && result.started && !result.pipeline.error) fmt::print("overlay: {}\n", opts.overlay);
+  if (!opts.overlay.empty() && result.started && !result.pipeline_report.error)
+    fmt::print("overlay: {}\n", opts.overlay);
   return voca::cli::reportRunEnd(result, opts.pipeline, "track");
 }
 

@@ -11,6 +11,7 @@
 
 #include "tools/voca/command.h"
 #include "voca/core/error.h"
+#include "voca_rt/error.h"
 
 namespace voca::cli {
 
@@ -86,6 +87,9 @@ int main(int argc, char** argv) {
     try {
       return run();
     } catch (const voca::InputError& e) {
+      fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
+      return 1;
+    } catch (const voca_rt::Error& e) {
       fmt::print(stderr, "voca {}: error: {}\n", sub->get_name(), e.what());
       return 1;
     } catch (const voca::RuntimeFailure& e) {

@@ -41,44 +41,56 @@ void addPipelineOptions(CLI::App& app, PipelineCli& cli) {
                  "Write statistics JSON: totals, per-stage latency, skipped frames, one row per frame");
 }
 
-void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& options) {
-  if (cli.threads == "auto") {
-    options.pipeline.threads = 0;
-  } else {
+pipeline::RunSettings runSettings(const PipelineCli& cli) {
+  pipeline::RunSettings settings;
+  if (cli.threads != "auto") {
     int threads = 0;
     const auto [end, ec] = std::from_chars(cli.threads.data(), cli.threads.data() + cli.threads.size(), threads);
     if (ec != std::errc{} || end != cli.threads.data() + cli.threads.size() || threads < 1) {
       throw InputError(fmt::format("--threads: expected auto or a positive count, got \"{}\"", cli.threads));
     }
-    options.pipeline.threads = threads;
+    settings.threads = threads;
   }
-  if (cli.frontend_threads == "auto") {
-    options.frontend_camera_threads = 0;
-  } else if (cli.frontend_threads == "1" || cli.frontend_threads == "2") {
-    options.frontend_camera_threads = cli.frontend_threads[0] - '0';
-  } else {
+  if (cli.frontend_threads == "1" || cli.frontend_threads == "2") {
+    settings.frontend_threads = cli.frontend_threads[0] - '0';
+  } else if (cli.frontend_threads != "auto") {
     throw InputError(fmt::format("--frontend-threads: expected auto, 1 or 2, got \"{}\"", cli.frontend_threads));
   }
-  if (!cli.pin.empty()) options.pipeline.pins = pipeline::parseStagePins(cli.pin);
-  const auto scheduling = platform::parseSchedulingPolicy(cli.scheduling);
-  if (!scheduling) throw InputError(fmt::format("--sched: expected other, fifo or rr, got \"{}\"", cli.scheduling));
-  options.pipeline.scheduling = *scheduling;
-  if (*scheduling != platform::SchedulingPolicy::kOther && (cli.priority < 1 || cli.priority > 99)) {
-    throw InputError(fmt::format("--priority: expected 1 to 99, got {}", cli.priority));
-  }
-  options.pipeline.priority = cli.priority;
-  options.pipeline.lock_memory = cli.lock_memory;
-  // NaN paced nothing (every comparison false): the run waited forever at frame 0.
-  if (!(cli.speed > 0.0 && cli.speed <= 1e6)) {
-    throw InputError(fmt::format("--speed: expected a factor above 0 and at most 1e6, got {}", cli.speed));
-  }
-  options.realtime = cli.realtime;
-  options.speed = cli.speed;
-  options.strict = cli.strict;
-  options.decoder = decode::parseDecoderKind(cli.decoder);
-  options.skip_deblock = cli.skip_deblock;
-  options.pipeline.trace_path = cli.trace;
-  options.statistics_file = cli.stats;
+  settings.pins = cli.pin;
+  settings.scheduling = cli.scheduling;
+  settings.priority = cli.priority;
+  settings.lock_memory = cli.lock_memory;
+  settings.realtime = cli.realtime;
+  settings.speed = cli.speed;
+  settings.strict = cli.strict;
+  settings.decoder = cli.decoder;
+  settings.skip_deblock = cli.skip_deblock;
+  settings.trace_file = cli.trace;
+  settings.statistics_file = cli.stats;
+  return settings;
+}
+
+void applyPipelineOptions(const PipelineCli& cli, pipeline::VoRunOptions& options) {
+  pipeline::applyRunSettings(runSettings(cli), options);
+}
+
+voca_rt::Options apiOptions(const PipelineCli& cli) {
+  const pipeline::RunSettings settings = runSettings(cli);
+  voca_rt::Options options;
+  options.threads = settings.threads;
+  options.frontend_threads = settings.frontend_threads;
+  options.pins = settings.pins;
+  options.scheduling = settings.scheduling;
+  options.priority = settings.priority;
+  options.lock_memory = settings.lock_memory;
+  options.strict = settings.strict;
+  options.decoder = settings.decoder;
+  options.skip_deblock = settings.skip_deblock;
+  options.trace_file = settings.trace_file;
+  options.statistics_file = settings.statistics_file;
+  options.progress = true;
+  options.stop_requested = platform::stopRequested;
+  return options;
 }
 
 std::string pipelineHelpFooter() {
@@ -102,14 +114,14 @@ std::string pipelineHelpFooter() {
 
 int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, const std::string& command) {
   for (const std::string& warning : result.warnings) fmt::print(stderr, "warning: {}\n", warning);
-  if (cli.profile) pipeline::printLatencyReport(result.pipeline, stdout);
+  if (cli.profile) pipeline::printLatencyReport(result.pipeline_report, stdout);
   // Named only when written: a run stopped before its first frame has no trace.
   if (!cli.trace.empty() && std::filesystem::exists(cli.trace)) {
     fmt::print("trace: {} (open in https://ui.perfetto.dev)\n", cli.trace);
   }
   if (!cli.stats.empty() && std::filesystem::exists(cli.stats)) fmt::print("statistics: {}\n", cli.stats);
-  if (result.pipeline.error) {
-    const pipeline::StageError& e = *result.pipeline.error;
+  if (result.pipeline_report.error) {
+    const pipeline::StageError& e = *result.pipeline_report.error;
     fmt::print(stderr, "voca {}: error: {} stage failed{}: {}\n", command, e.stage,
                e.frame_index >= 0 ? fmt::format(" at frame {}", e.frame_index) : std::string(), e.message);
     return 1;
@@ -122,6 +134,34 @@ int reportRunEnd(const pipeline::VoRunResult& result, const PipelineCli& cli, co
     fmt::print(stderr, "voca {}: stopped by signal {} after {} frames; outputs hold everything processed\n", command,
                result.stop_signal, result.frames);
     return platform::interruptedExitCode(result.stop_signal);
+  }
+  return 0;
+}
+
+}  // namespace voca::cli
+
+namespace voca::cli {
+
+int reportRunEnd(const voca_rt::Summary& summary, const PipelineCli& cli, const std::string& command) {
+  for (const std::string& warning : summary.warnings) fmt::print(stderr, "warning: {}\n", warning);
+  if (cli.profile) std::fputs(summary.latency_report.c_str(), stdout);
+  // Named only when written: a run stopped before its first frame has no trace.
+  if (!cli.trace.empty() && std::filesystem::exists(cli.trace)) {
+    fmt::print("trace: {} (open in https://ui.perfetto.dev)\n", cli.trace);
+  }
+  if (!cli.stats.empty() && std::filesystem::exists(cli.stats)) fmt::print("statistics: {}\n", cli.stats);
+  if (!summary.error.empty()) {
+    fmt::print(stderr, "voca {}: error: {}\n", command, summary.error);
+    return 1;
+  }
+  if (!summary.failure.empty()) {
+    fmt::print(stderr, "voca {}: error: {}\n", command, summary.failure);
+    return 1;
+  }
+  if (summary.stop_signal != 0) {
+    fmt::print(stderr, "voca {}: stopped by signal {} after {} frames; outputs hold everything processed\n", command,
+               summary.stop_signal, summary.frames);
+    return platform::interruptedExitCode(summary.stop_signal);
   }
   return 0;
 }

@@ -21,7 +21,7 @@ namespace {
 // Checks the inputs before any member is built from them.
 const BackendConfig& validated(const BackendConfig& config, const StereoRig& rig) {
   validateBackendConfig(config, "backend");
-  if (rig.cameras.size() < 2) throw InputError("backend: the calibration needs two cameras (stereo)");
+  rig.requireStereo();
   return config;
 }
 

@@ -4,11 +4,15 @@
 
 namespace voca {
 
-SE3d StereoRig::T_cam0_cam1() const {
+void StereoRig::requireStereo() const {
   if (cameras.size() < 2) {
-    throw InputError(source + ": a stereo rig needs two cameras, this calibration has " +
+    throw InputError(source + ": need a stereo calibration (two cameras), this one has " +
                      std::to_string(cameras.size()));
   }
+}
+
+SE3d StereoRig::T_cam0_cam1() const {
+  requireStereo();
   return cameras[0].T_body_cam.inverse() * cameras[1].T_body_cam;
 }
 

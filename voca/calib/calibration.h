@@ -26,6 +26,8 @@ struct StereoRig {
   std::string source;      // the file or folder it was read from
   std::string body_frame;  // see above
 
+  // Throws InputError naming the source unless the rig has the two cameras stereo needs.
+  void requireStereo() const;
   // Pose of cam1 in cam0 (maps cam1 points into cam0). Requires two cameras.
   SE3d T_cam0_cam1() const;
   double baselineM() const { return T_cam0_cam1().translation().norm(); }

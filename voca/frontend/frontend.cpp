@@ -71,10 +71,7 @@ Eigen::Vector2f principalPoint(const CameraCalibration& camera) {
 KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities)
     : config_(config) {
   validateFrontendConfig(config_);
-  if (rig.cameras.size() < 2) {
-    throw InputError(
-        fmt::format("{}: the frontend needs a stereo calibration (2 cameras), got {}", rig.source, rig.cameras.size()));
-  }
+  rig.requireStereo();
   pattern_ = patternBySize(config_.pattern);
   num_levels_ = config_.pyramid_levels + 1;
   prior_levels_ = config_.prior_pyramid_levels < 0 ? num_levels_ : config_.prior_pyramid_levels + 1;
