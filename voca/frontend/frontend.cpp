@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "voca/core/error.h"
+#include "voca/geometry/so3.h"
 
 namespace voca {
 
@@ -52,12 +53,6 @@ void prefetchTemplates(std::span<const PatchTemplate> templates) {
   const auto* bytes = reinterpret_cast<const char*>(templates.data());
   for (std::size_t offset = 0; offset < templates.size_bytes(); offset += kLineBytes)
     __builtin_prefetch(bytes + offset);
-}
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
 }
 
 // The centre of the detection mask (image_safe_radius_px): every camera model starts fx fy cx cy.
@@ -122,7 +117,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   T_cam1_cam0_ = T_cam0_cam1.inverse();
   // f0 ~ R f1 + t up to depth; f0 . (t x R f1) = 0. t normalised so the threshold is scale-free.
   const Eigen::Vector3d t = T_cam0_cam1.translation();
-  essential_ = skew(t.norm() > 0.0 ? Eigen::Vector3d(t.normalized()) : t) * T_cam0_cam1.rotationMatrix();
+  essential_ = SO3d::hat(t.norm() > 0.0 ? Eigen::Vector3d(t.normalized()) : t) * T_cam0_cam1.rotationMatrix();
   average_depth_m_ = config_.matching_default_depth_m;
   if (config_.thin_when_full_px > 0.0) {
     thin_cell_px_ = static_cast<float>(config_.thin_when_full_px / 2.0);
