@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 
@@ -17,13 +18,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
         fmt::format("{}: the frontend needs a stereo calibration (2 cameras), got {}", rig.source, rig.cameras.size()));
   }
   const int num_levels = config_.pyramid_levels + 1;
-  AlignParams align;
-  align.max_iterations = config_.max_iterations;
-  align.min_step_px = static_cast<float>(config_.min_step_px);
-  align.coarse_min_step_px = static_cast<float>(config_.coarse_min_step_px);
-  align.skip_coarse_outside = config_.skip_coarse_outside;
-  const int backward_levels = config_.backward_pyramid_levels < 0 ? num_levels : config_.backward_pyramid_levels + 1;
-  const RoundTripTracker klt(*patternBySize(config_.pattern), align, backward_levels);
+  const RoundTripTracker klt(config_);
   max_points_ = capacities.max_points;
   if (max_points_ < 1 || max_points_ > FrontendCapacities::kMaxPointsBound) {
     throw InputError(fmt::format("frontend capacity: max_points {} must be between 1 and {}", max_points_,
@@ -54,13 +49,12 @@ void KltFrontend::reset() {
 }
 
 void KltFrontend::track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
-  beginFrame(input, stats);
-  trackCamera(0, input, stats);
-  trackCamera(1, input, stats);
+  const int items = beginFrame(input, stats);
+  for (int item = 0; item < items; ++item) runItem(item, input);
   endFrame(input, out, stats);
 }
 
-void KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& stats) {
+int KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& stats) {
   frame_start_ = std::chrono::steady_clock::now();
   for (int c = 0; c < 2; ++c) {
     const GrayImage& image = input.images[static_cast<std::size_t>(c)];
@@ -75,35 +69,40 @@ void KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& sta
   if (std::isfinite(input.depth_hint_m) && input.depth_hint_m > 0.0) stereo_.setAverageDepth(input.depth_hint_m);
   presmooth_ = appliesTo(config_.presmooth, input.decoded);
   retry_flow_ = appliesTo(config_.retry_previous_flow, input.decoded);
+  // Both items track left points: its pyramid must exist before either starts.
+  startCamera(0, input);
+  const std::size_t left = cameras_[0].size(), right = cameras_[1].size();
+  left_split_ = std::min(left, (left + right) / 2);
+  return kWorkItems;
 }
 
-void KltFrontend::trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
-  beginCamera(camera, input, stats);
-  trackPart(camera, 0, 0, trackedPoints(camera));
-  endCamera(camera, stats);
-}
-
-void KltFrontend::beginCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats) {
+void KltFrontend::startCamera(int camera, const DecodedStereoFrame& input) {
   const auto c = static_cast<std::size_t>(camera);
   cameras_[c].advance(input.images[c].view(), presmooth_);
   temporal_[c].begin(input.has_motion ? &input.motion[c] : nullptr, input.frames_missing_before, have_previous_,
                      retry_flow_, cameras_[c]);
-  stats.bridged[c] = temporal_[c].bridged();
 }
 
-void KltFrontend::trackPart(int camera, int part, std::size_t begin, std::size_t end) {
-  const auto c = static_cast<std::size_t>(camera);
-  temporal_[c].trackShare(part, begin, end, cameras_[c]);
-}
-
-void KltFrontend::endCamera(int camera, FrontendStats& stats) {
-  const auto c = static_cast<std::size_t>(camera);
-  temporal_[c].finish(cameras_[c]);
-  stats.temporal[c] = temporal_[c].stats();
+void KltFrontend::runItem(int item, const DecodedStereoFrame& input) {
+  assert(item >= 0 && item < kWorkItems);
+  CameraTracks& left = cameras_[0];
+  if (item == 0) {
+    temporal_[0].trackShare(0, 0, left_split_, left);
+    return;
+  }
+  CameraTracks& right = cameras_[1];
+  startCamera(1, input);
+  temporal_[1].trackShare(0, 0, right.size(), right);
+  temporal_[1].finish(right);
+  temporal_[0].trackShare(1, left_split_, left.size(), left);
 }
 
 void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
-  for (const TemporalTracker& temporal : temporal_) {
+  temporal_[0].finish(cameras_[0]);
+  for (std::size_t c = 0; c < 2; ++c) {
+    const TemporalTracker& temporal = temporal_[c];
+    stats.temporal[c] = temporal.stats();
+    stats.bridged[c] = temporal.bridged();
     stats.guess_dist_plain_px.insert(stats.guess_dist_plain_px.end(), temporal.guessDistPlain().begin(),
                                      temporal.guessDistPlain().end());
     stats.guess_dist_prior_px.insert(stats.guess_dist_prior_px.end(), temporal.guessDistPrior().begin(),

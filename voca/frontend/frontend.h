@@ -47,23 +47,15 @@ class KltFrontend {
   // positive hint seen; the default depth until then). out carries the frame's t_ns, frame_index and
   // frames_missing_before.
   void track(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
-  // track() in three steps, for a caller that tracks the two cameras on two threads: beginFrame,
-  // then trackCamera(0) and trackCamera(1), which touch disjoint state and may run concurrently
-  // (each builds its camera's pyramid and tracks its points into it), then endFrame (thinning,
-  // detection, stereo matching, the epipolar check, the output). The same results as track(), bit
-  // for bit, in either order of the two cameras.
-  void beginFrame(const DecodedStereoFrame& input, FrontendStats& stats);
-  void trackCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
+  // track() as work items, for a caller that spreads one frame over threads:
+  //   const int items = beginFrame(input, stats);
+  //   runItem(i, input) once for every i < items: in any order, on any threads, concurrently;
+  //   endFrame(input, out, stats) once they have all returned.
+  // The items touch disjoint state and their results are joined in the points' order, so every
+  // schedule computes what track() does, bit for bit. Each holds about half of the frame's tracking.
+  int beginFrame(const DecodedStereoFrame& input, FrontendStats& stats);
+  void runItem(int item, const DecodedStereoFrame& input);
   void endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats);
-  // trackCamera() in three steps, to share one camera's points between two threads: beginCamera
-  // (its pyramid and prior field), then trackPart(camera, 0, 0, k) and trackPart(camera, 1, k, n)
-  // for any split k of its n = trackedPoints(camera) points, which may run concurrently with each
-  // other and with the other camera's steps, then endCamera (the shares joined in the points' order,
-  // the frame-level retry). The same results as trackCamera(), bit for bit, for every k.
-  void beginCamera(int camera, const DecodedStereoFrame& input, FrontendStats& stats);
-  std::size_t trackedPoints(int camera) const { return cameras_[static_cast<std::size_t>(camera)].size(); }
-  void trackPart(int camera, int part, std::size_t begin, std::size_t end);
-  void endCamera(int camera, FrontendStats& stats);
   // Forgets every track (the next frame starts from detection).
   void reset();
 
@@ -72,6 +64,15 @@ class KltFrontend {
   const FrontendConfig& config() const { return config_; }
 
  private:
+  // The camera's new image and the start of its temporal step.
+  void startCamera(int camera, const DecodedStereoFrame& input);
+
+  // Item 0 tracks the left camera's points before left_split_; item 1 the right camera's (its
+  // pyramid and step from start to finish) and the left camera's rest. The left camera usually has
+  // more points than the right (not every new point is found in the right image): left_split_ puts
+  // about half of all points in each item.
+  static constexpr int kWorkItems = 2;
+  std::size_t left_split_ = 0;
   FrontendConfig config_;
   int max_points_ = 0;
   int width_ = 0, height_ = 0;

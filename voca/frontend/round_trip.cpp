@@ -4,6 +4,15 @@
 
 namespace voca {
 
+RoundTripTracker::RoundTripTracker(const FrontendConfig& config) : pattern_(patternBySize(config.pattern)) {
+  align_.max_iterations = config.max_iterations;
+  align_.min_step_px = static_cast<float>(config.min_step_px);
+  align_.coarse_min_step_px = static_cast<float>(config.coarse_min_step_px);
+  align_.skip_coarse_outside = config.skip_coarse_outside;
+  const int num_levels = config.pyramid_levels + 1;
+  backward_levels_ = config.backward_pyramid_levels < 0 ? num_levels : config.backward_pyramid_levels + 1;
+}
+
 bool RoundTripTracker::trackForward(std::span<const PatchTemplate> forward, const ImagePyramid& to,
                                     const Eigen::Vector2f& p, const Eigen::Vector2f& flow_guess, int levels,
                                     Eigen::Vector2f& tracked, Eigen::Vector2f& fine_start) const {

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <span>
 
+#include "voca/frontend/frontend_config.h"
 #include "voca/frontend/patch.h"
 #include "voca/frontend/pyramid.h"
 #include "voca/frontend/track_store.h"
@@ -15,10 +16,8 @@ namespace voca {
 class RoundTripTracker {
  public:
   RoundTripTracker() = default;
-  // backward_levels: the back track runs on at most this many of the finest levels (the config's
-  // backward_pyramid_levels + 1); a forward track on more levels is checked from its finer ones.
-  RoundTripTracker(const PatchPattern& pattern, const AlignParams& align, int backward_levels)
-      : pattern_(&pattern), align_(align), backward_levels_(backward_levels) {}
+  // The config's pattern and alignment keys; a validated config (validateFrontendConfig).
+  explicit RoundTripTracker(const FrontendConfig& config);
 
   const PatchPattern& pattern() const { return *pattern_; }
 
@@ -44,6 +43,8 @@ class RoundTripTracker {
  private:
   const PatchPattern* pattern_ = nullptr;
   AlignParams align_;
+  // The back track runs on at most this many of the finest levels (backward_pyramid_levels + 1): a
+  // forward track on more levels is checked from its finer ones.
   int backward_levels_ = 0;
 };
 

@@ -36,8 +36,7 @@ class StereoMatcher {
   // stereo_rematch: matches the left tracks that have no right view into the right image again.
   void rematch(CameraTracks& left, CameraTracks& right, FrontendStats& stats);
   // detection_nonoverlap: new right points in the cells the left camera does not see.
-  void detectRightOnly(GrayView right_image, CameraTracks& right, std::uint64_t& next_track_id,
-                       FrontendStats& stats);
+  void detectRightOnly(GrayView right_image, CameraTracks& right, std::uint64_t& next_track_id, FrontendStats& stats);
   // Drops the right views of pairs whose unit bearings fail |f0^T E f1| <= epipolar_error.
   void filterEpipolar(const CameraTracks& left, CameraTracks& right, FrontendStats& stats);
 
