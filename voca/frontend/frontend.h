@@ -1,13 +1,18 @@
 #pragma once
 // The KLT frontend: temporal and stereo patch tracking with codec motion-vector priors, corner
-// detection and persistent track ids, with all memory fixed at construction.
+// detection and persistent track ids, with all memory fixed at construction. It composes, in the
+// order a frame passes through them:
+//   track_store.h       each camera's last two pyramids and its tracks (ids, positions, templates)
+//   temporal_tracker.h  each track into the new image: codec priors, round trips, the flow retry
+//   track_thinning.h    crowded tracks giving way when the capacity is full
+//   stereo_matcher.h    new points and their right views, re-matching, right-only points, epipolar check
+//   round_trip.h        the round-trip-checked KLT that the temporal and stereo steps share
 
-#include <Eigen/Core>
 #include <array>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <span>
-#include <vector>
 
 #include "voca/calib/calibration.h"
 #include "voca/core/image.h"
