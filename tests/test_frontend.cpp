@@ -20,6 +20,9 @@
 #include "voca/frontend/image_shift.h"
 #include "voca/frontend/patch.h"
 #include "voca/frontend/pyramid.h"
+#include "voca/frontend/round_trip.h"
+#include "voca/frontend/temporal_tracker.h"
+#include "voca/frontend/track_store.h"
 
 using namespace voca;
 using voca::test::WaveTexture;
@@ -1446,9 +1449,7 @@ TEST_CASE("frontend: codec confidence: vectors of small, inconsistent or poorly 
   }
 }
 
-TEST_CASE(
-    "frontend: the cameras, and shares of one camera's points, tracked on two threads or in any order, give "
-    "track()'s results bit for bit") {
+TEST_CASE("frontend: the work items of a frame, on two threads or in any order, give track()'s results bit for bit") {
   // The image moves 6, 12, ... 30 px in frames 1-5 (and a third of that down): beyond the pyramid's
   // reach from about 20 px on, where the previous-flow retry keeps the tracks. The vectors are the
   // first frame's motion a pixel off, so the prior tracks run and agree at first, then fail.
@@ -1459,15 +1460,15 @@ TEST_CASE(
   config.retry_previous_flow = InputScope::kAlways;
   MotionField field(seq.kWidth, seq.kHeight);
   uniformField(field, seq.kWidth, seq.kHeight, seq.flow.cast<float>() + Eigen::Vector2f(1.f, -0.5f), PictureType::kP);
-  // kSplit: as the frontend stage's helper does, one thread tracks the left camera's first points,
-  // the other the right camera and the left's last ones, split at `share` of the left points.
-  enum class Order { kTrack, kConcurrent, kRightFirst, kSplit, kSplitLastFirst };
+  // kConcurrent: as the frontend stage with its helper thread, which runs the odd items while the
+  // calling thread runs the even ones.
+  enum class Order { kTrack, kConcurrent, kReversed };
   struct Frame {
     TrackedStereoFrame tracked;
     FrontendStats stats;
     std::vector<PointTrace> left_traces;
   };
-  const auto run = [&](Order order, double share = 0.0) {
+  const auto run = [&](Order order) {
     KltFrontend frontend(config, rig, {.max_points = 200});
     std::vector<Frame> frames(6);
     Eigen::Vector2d position = Eigen::Vector2d::Zero();
@@ -1480,36 +1481,20 @@ TEST_CASE(
       Frame& out = frames[static_cast<std::size_t>(k)];
       if (order == Order::kTrack) {
         frontend.track(in, out.tracked, out.stats);
-        out.left_traces.assign(frontend.traces(0).begin(), frontend.traces(0).end());
-        continue;
-      }
-      frontend.beginFrame(in, out.stats);
-      if (order == Order::kSplit || order == Order::kSplitLastFirst) {
-        frontend.beginCamera(0, in, out.stats);
-        const std::size_t n = frontend.trackedPoints(0);
-        const auto split = static_cast<std::size_t>(std::lround(share * static_cast<double>(n)));
-        if (order == Order::kSplit) {
+      } else {
+        const int items = frontend.beginFrame(in, out.stats);
+        REQUIRE(items >= 2);
+        if (order == Order::kConcurrent) {
           std::thread helper([&] {
-            frontend.trackCamera(1, in, out.stats);
-            frontend.trackPart(0, 1, split, n);
+            for (int item = 1; item < items; item += 2) frontend.runItem(item, in);
           });
-          frontend.trackPart(0, 0, 0, split);
+          for (int item = 0; item < items; item += 2) frontend.runItem(item, in);
           helper.join();
         } else {
-          frontend.trackPart(0, 1, split, n);
-          frontend.trackPart(0, 0, 0, split);
-          frontend.trackCamera(1, in, out.stats);
+          for (int item = items - 1; item >= 0; --item) frontend.runItem(item, in);
         }
-        frontend.endCamera(0, out.stats);
-      } else if (order == Order::kConcurrent) {
-        std::thread right([&] { frontend.trackCamera(1, in, out.stats); });
-        frontend.trackCamera(0, in, out.stats);
-        right.join();
-      } else {
-        frontend.trackCamera(1, in, out.stats);
-        frontend.trackCamera(0, in, out.stats);
+        frontend.endFrame(in, out.tracked, out.stats);
       }
-      frontend.endFrame(in, out.tracked, out.stats);
       out.left_traces.assign(frontend.traces(0).begin(), frontend.traces(0).end());
     }
     return frames;
@@ -1526,13 +1511,10 @@ TEST_CASE(
   CHECK(prior_tracks > 100);
   CHECK(retried > 10);
   CHECK(reference.back().tracked.observations[1].size() > 30);
-  const std::vector<std::pair<Order, double>> layouts = {
-      {Order::kConcurrent, 0.0}, {Order::kRightFirst, 0.0}, {Order::kSplit, 0.0},         {Order::kSplit, 0.37},
-      {Order::kSplit, 0.5},      {Order::kSplit, 1.0},      {Order::kSplitLastFirst, 0.6}};
-  for (const auto& [order, share] : layouts) {
-    const std::vector<Frame> frames = run(order, share);
+  for (const Order order : {Order::kConcurrent, Order::kReversed}) {
+    const std::vector<Frame> frames = run(order);
     for (std::size_t k = 0; k < frames.size(); ++k) {
-      INFO("order " << static_cast<int>(order) << ", share " << share << ", frame " << k);
+      INFO("order " << static_cast<int>(order) << ", frame " << k);
       const Frame& a = reference[k];
       const Frame& b = frames[k];
       for (std::size_t c = 0; c < 2; ++c) {
@@ -1558,6 +1540,91 @@ TEST_CASE(
         CHECK(a.left_traces[i].track_id == b.left_traces[i].track_id);
         CHECK(a.left_traces[i].tracked_px == b.left_traces[i].tracked_px);
         CHECK(a.left_traces[i].kept == b.left_traces[i].kept);
+      }
+    }
+  }
+}
+
+TEST_CASE(
+    "temporal tracking: one camera's points in two shares, split anywhere, on two threads or in either order, give "
+    "one share's results bit for bit") {
+  // The sequence of the test above, one camera: prior tracks that agree at first, then fail, and the
+  // previous-flow retry.
+  PlaneSequence seq{WaveTexture(5, 48, 5.0, 30.0), Eigen::Vector2d(6.0, 2.0)};
+  FrontendConfig config;
+  config.prior_mode = PriorMode::kMvParallelOf;
+  config.retry_previous_flow = InputScope::kAlways;
+  MotionField field(seq.kWidth, seq.kHeight);
+  uniformField(field, seq.kWidth, seq.kHeight, seq.flow.cast<float>() + Eigen::Vector2f(1.f, -0.5f), PictureType::kP);
+  const RoundTripTracker klt(config);
+  constexpr int kMaxPoints = 200;
+  struct Step {
+    std::vector<std::uint64_t> ids;
+    std::vector<Eigen::Vector2f> points;
+    TemporalStats stats;
+    std::vector<PointTrace> traces;
+  };
+  enum class Order { kConcurrent, kSecondFirst };
+  const auto run = [&](double split_fraction, Order order) {
+    CameraTracks camera(kMaxPoints, TemporalTracker::kScratchSlots, seq.kWidth, seq.kHeight, config.pyramid_levels + 1,
+                        false);
+    TemporalTracker temporal(config, klt, kMaxPoints, seq.kWidth, seq.kHeight, camera);
+    std::vector<Step> steps;
+    Eigen::Vector2d position = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 6; ++k) {
+      position += k * seq.flow;
+      seq.renderAt(position);
+      camera.advance(seq.input(k).images[0].view(), false);
+      temporal.begin(&field, 0, k > 0, true, camera);
+      if (k == 0) {
+        std::uint64_t id = 1;
+        for (int y = 30; y < seq.kHeight - 30; y += 20) {
+          for (int x = 30; x < seq.kWidth - 30; x += 20)
+            camera.addDetected(id++, Eigen::Vector2f(static_cast<float>(x), static_cast<float>(y)), klt.pattern());
+        }
+        continue;
+      }
+      const std::size_t n = camera.size();
+      const auto split = static_cast<std::size_t>(std::lround(split_fraction * static_cast<double>(n)));
+      if (order == Order::kConcurrent) {
+        std::thread second([&] { temporal.trackShare(1, split, n, camera); });
+        temporal.trackShare(0, 0, split, camera);
+        second.join();
+      } else {
+        temporal.trackShare(1, split, n, camera);
+        temporal.trackShare(0, 0, split, camera);
+      }
+      temporal.finish(camera);
+      steps.push_back(
+          {camera.ids, camera.points, temporal.stats(), {temporal.traces().begin(), temporal.traces().end()}});
+    }
+    return steps;
+  };
+  const std::vector<Step> reference = run(1.0, Order::kSecondFirst);
+  // The sequence exercises what a share writes: prior tracks, kept tracks, retry candidates.
+  int prior_tracks = 0, retried = 0;
+  for (const Step& step : reference) {
+    prior_tracks += step.stats.tracked_prior;
+    retried += step.stats.flow_retried;
+  }
+  CHECK(prior_tracks > 200);
+  CHECK(retried > 50);
+  CHECK(reference.back().ids.size() > 30);
+  for (const double split : {0.0, 0.37, 0.5, 1.0}) {
+    for (const Order order : {Order::kConcurrent, Order::kSecondFirst}) {
+      const std::vector<Step> steps = run(split, order);
+      REQUIRE(steps.size() == reference.size());
+      for (std::size_t k = 0; k < steps.size(); ++k) {
+        INFO("split " << split << ", order " << static_cast<int>(order) << ", step " << k);
+        CHECK(steps[k].ids == reference[k].ids);
+        CHECK(steps[k].points == reference[k].points);
+        CHECK(steps[k].stats == reference[k].stats);
+        REQUIRE(steps[k].traces.size() == reference[k].traces.size());
+        for (std::size_t i = 0; i < steps[k].traces.size(); ++i) {
+          CHECK(steps[k].traces[i].track_id == reference[k].traces[i].track_id);
+          CHECK(steps[k].traces[i].tracked_px == reference[k].traces[i].tracked_px);
+          CHECK(steps[k].traces[i].kept == reference[k].traces[i].kept);
+        }
       }
     }
   }

@@ -11,6 +11,10 @@
 # camN/sensor.yaml) and a KITTI odometry sequence folder (calib.txt, --config kitti), each run on its
 # raw images and encoded on the fly at 500k; with the KITTI ground truth beside it
 # (../../poses/<sequence>.txt), also the `voca eval --json` report of the 500k trajectory.
+# Every input with motion vectors also runs in other thread layouts (the frontend on one thread and
+# with its helper, --frontend-threads 1 / 2, and every stage on one thread, --threads 1), compared
+# across the binaries like any run, and each binary's layouts with one another: where a stage runs
+# must not change what it computes.
 set -euo pipefail
 
 usage() {
@@ -47,6 +51,17 @@ runs=("synth_none|run s500 --mode none"
       "synth_mv_parallel_of|run s500 --mode mv_parallel_of")
 [[ -n "$euroc" ]] && runs+=("euroc_raw|run $euroc" "euroc_500k|run $euroc --encode 500k")
 [[ -n "$kitti" ]] && runs+=("kitti_raw|run $kitti --config kitti" "kitti_500k|run $kitti --config kitti --encode 500k")
+# The thread layouts: each run named here again as <name>_<layout>.
+layouts=("frontend1|--frontend-threads 1" "frontend2|--frontend-threads 2" "threads1|--threads 1")
+layout_runs=(synth_mv_parallel_of)
+[[ -n "$euroc" ]] && layout_runs+=(euroc_500k)
+[[ -n "$kitti" ]] && layout_runs+=(kitti_500k)
+for name in "${layout_runs[@]}"; do
+  for run in "${runs[@]}"; do
+    [[ ${run%%|*} == "$name" ]] || continue
+    for layout in "${layouts[@]}"; do runs+=("${name}_${layout%%|*}|${run#*|} ${layout#*|}"); done
+  done
+done
 
 status=0
 for run in "${runs[@]}"; do
@@ -69,6 +84,26 @@ for run in "${runs[@]}"; do
     echo "DIFFERENT  $name  A $hash_a  B $hash_b"
     status=1
   fi
+done
+
+# Each binary's layouts against its default layout.
+for name in "${layout_runs[@]}"; do
+  same=1
+  for label in a b; do
+    [[ -f $label/$name.txt ]] || { same=0; continue; }  # its failure is reported above
+    hash_default=$(sha256sum "$label/$name.txt" | cut -d' ' -f1)
+    for layout in "${layouts[@]}"; do
+      file="$label/${name}_${layout%%|*}.txt"
+      [[ -f $file ]] || { same=0; continue; }
+      hash_layout=$(sha256sum "$file" | cut -d' ' -f1)
+      if [[ "$hash_layout" != "$hash_default" ]]; then
+        echo "DIFFERENT  ${name}_${layout%%|*} ($label) $hash_layout, its default layout $hash_default"
+        same=0
+        status=1
+      fi
+    done
+  done
+  if [[ $same == 1 ]]; then echo "identical  $name in every layout, in A and in B"; fi
 done
 
 # The evaluation report reads the calibration, both trajectories and the times file and writes JSON.

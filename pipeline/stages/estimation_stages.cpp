@@ -46,8 +46,7 @@ void FrontendStage::start(const StageContext& context) {
     helper_ = std::make_unique<StageHelper>(
         "voca-frontend.helper",
         [this] {
-          frontend_.trackCamera(1, *helper_frame_, *helper_stats_);
-          frontend_.trackPart(0, 1, left_split_, frontend_.trackedPoints(0));
+          for (int item = 1; item < frame_items_; item += 2) frontend_.runItem(item, *helper_frame_);
         },
         context.helperCore(name()));
   }
@@ -65,29 +64,24 @@ void FrontendStage::process(FrameSlot& slot, Emitter& out) {
     return;
   }
   ++frames_;
+  const int items = frontend_.beginFrame(frame, slot.frontend_stats);
   if (helper_ == nullptr) {
-    frontend_.track(frame, slot.tracked, slot.frontend_stats);
+    for (int item = 0; item < items; ++item) frontend_.runItem(item, frame);
   } else {
-    frontend_.beginFrame(frame, slot.frontend_stats);
-    frontend_.beginCamera(0, frame, slot.frontend_stats);
-    // The left camera usually has more points than the right (new points are matched into the right
-    // image, and not all are found): the helper takes the right camera's and the left's last ones, so
-    // both threads track about half of all points.
-    const std::size_t left = frontend_.trackedPoints(0), right = frontend_.trackedPoints(1);
-    left_split_ = std::min(left, (left + right) / 2);
+    // The helper runs the odd items, this thread the even ones: the frontend makes its items of about
+    // equal work.
     helper_frame_ = &frame;
-    helper_stats_ = &slot.frontend_stats;
+    frame_items_ = items;
     helper_->request();
     try {
-      frontend_.trackPart(0, 0, 0, left_split_);
+      for (int item = 0; item < items; item += 2) frontend_.runItem(item, frame);
     } catch (...) {
       helper_->wait();  // the helper works on the same frontend: it must finish first
       throw;
     }
     helper_->wait();
-    frontend_.endCamera(0, slot.frontend_stats);
-    frontend_.endFrame(frame, slot.tracked, slot.frontend_stats);
   }
+  frontend_.endFrame(frame, slot.tracked, slot.frontend_stats);
   if (keep_left_traces_) {
     const auto traces = frontend_.traces(0);
     slot.left_traces.assign(traces.begin(), traces.end());

@@ -35,8 +35,8 @@ class DepthHintChannel {
 class FrontendStage final : public Stage {
  public:
   // hints: non-null when the config's stereo guess uses the backend's depth. camera_threads 2: a
-  // helper thread tracks the right camera and the left camera's last points while the stage's thread
-  // tracks the left camera's first ones, about half of all points each (the same results).
+  // helper thread runs half of each frame's work items (KltFrontend::runItem) while the stage's
+  // thread runs the other half (the same results).
   FrontendStage(const FrontendConfig& config, const StereoRig& rig, const FrontendCapacities& capacities,
                 DepthHintChannel* hints, bool keep_left_traces, int camera_threads = 1);
   std::string_view name() const override { return "frontend"; }
@@ -53,11 +53,9 @@ class FrontendStage final : public Stage {
   KltFrontend frontend_;
   int camera_threads_;
   std::unique_ptr<StageHelper> helper_;
-  // The frame the helper tracks the right camera of, and where its share of the left camera's
-  // points begins, set before each request.
+  // The frame whose work items the helper runs, and how many it has, set before each request.
   const DecodedStereoFrame* helper_frame_ = nullptr;
-  FrontendStats* helper_stats_ = nullptr;
-  std::size_t left_split_ = 0;
+  int frame_items_ = 0;
   DepthHintChannel* hints_;
   bool keep_left_traces_;
   const StageContext* context_ = nullptr;
