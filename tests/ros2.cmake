@@ -1,3 +1,4 @@
-# ROS 2 over DDS without ROS: names and domains, the twist, and the bytes on the wire against the
-# IDL's layout (a known answer). Runs Cyclone DDS on loopback.
-voca_add_test(test_ros2 SOURCES test_ros2.cpp LIBS voca_drivers_ros2 voca_drivers_ros2_msgs TIMEOUT 120)
+# ROS 2 over DDS without ROS: names and domains, the twist, the bytes on the wire against the IDL's
+# layout (a known answer), and the sink's policy, ring and drain. Runs Cyclone DDS on loopback.
+voca_add_test(test_ros2 SOURCES test_ros2.cpp test_ros2_sink.cpp LIBS voca_pipeline_sinks voca_drivers_ros2 voca_drivers_ros2_msgs
+              TIMEOUT 120)
