@@ -17,6 +17,7 @@
 #include "formats/dataset/dataset.h"
 #include "formats/eval/eval_report_json.h"
 #include "pipeline/sinks/overlay_sink.h"
+#include "pipeline/sinks/ros2_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
 #include "pipeline/stages/decode_stage.h"
 #include "pipeline/stages/estimation_stages.h"
@@ -472,6 +473,13 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                        tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
+  std::unique_ptr<Ros2Sink> ros2;
+  if (options.ros2) {
+    if (!options.estimate) throw InputError("ROS 2 odometry needs poses: a tracking-only run estimates none");
+    ros2 = std::make_unique<Ros2Sink>(*options.ros2);
+    ros2->start();
+    sinks.push_back(ros2.get());
+  }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
   SinkStage sink(sinks);
   chain.push_back(&sink);
@@ -492,6 +500,20 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   result.rows = statistics.rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
+  if (ros2) {
+    result.ros2_summary = ros2->summary();
+    const Ros2Sink::Counters published = ros2->counters();
+    if (published.dropped > 0) {
+      result.warnings.push_back(
+          fmt::format("ROS 2: {} odometry messages dropped: the publisher thread fell behind "
+                      "(a slow network or subscriber)",
+                      published.dropped));
+    }
+    if (published.failed > 0) {
+      result.warnings.push_back(
+          fmt::format("ROS 2: {} odometry messages not published: {}", published.failed, ros2->firstError()));
+    }
+  }
   if (options.estimate && !result.pipeline.stopped && !result.pipeline.error && result.frames > 0 &&
       result.backend.keyframes == 0 && result.backend.lost >= result.frames) {
     result.failure = noEstimateReason(result, options.max_points);

@@ -11,6 +11,7 @@
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/ros2_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -23,6 +24,7 @@ struct LiveOptions {
   int max_points = 1000;
   bool track_only = false;
   voca::cli::PipelineCli pipeline;
+  voca::cli::Ros2Cli ros2;
 };
 
 int runLive(const LiveOptions& o) {
@@ -40,9 +42,12 @@ int runLive(const LiveOptions& o) {
   run.trajectory_format = *format;
   voca::cli::applyPipelineOptions(o.pipeline, run);
   if (run.realtime) throw voca::InputError("--realtime: cameras are live already (it paces recorded input)");
+  if (o.ros2.enabled && o.track_only) throw voca::InputError("--ros2 publishes poses; --track-only estimates none");
+  voca::cli::applyRos2Options(o.ros2, run);
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometryOnCameras(options);
   voca::pipeline::printRunSummary(result, stdout);
+  voca::cli::printRos2Summary(result);
   if (!o.out.empty()) fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
   return voca::cli::reportRunEnd(result, o.pipeline, "live");
 }
@@ -65,11 +70,12 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
       app.add_flag("--track-only", o->track_only, "Frontend only: track features, estimate no poses");
       voca::cli::addPipelineOptions(app, o->pipeline);
+      voca::cli::addRos2Options(app, o->ros2);
       app.footer(voca::cli::cameraHelpFooter() + "\n\n" +
                  "Live input always runs with the live policy: when a stage falls behind, the oldest waiting frame\n"
                  "is dropped and counted (--profile lists drops per stage). Timestamps are the cameras' kernel\n"
                  "timestamps, so the trajectory lines up with other sensors on CLOCK_MONOTONIC.\n\n" +
-                 voca::cli::pipelineHelpFooter());
+                 voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter());
       return [o] { return runLive(*o); };
     },
 });
