@@ -20,10 +20,13 @@ esac
 # The ARM counterparts of the compiled -dev packages in tools/setup.sh. Header-only and arch:all
 # packages (Eigen, nlohmann-json, CLI11, doctest, the queues) serve every architecture as they are.
 # libva/libdrm/libcamera feed optional drivers; they are installed so CI cross-builds those too.
+# cyclonedds-dev is Multi-Arch: same; its code generator idlc (cyclonedds-tools) runs on the build
+# machine, so only the amd64 one is needed.
 dev_packages=(
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libx264-dev
   libva-dev libdrm-dev libcamera-dev
   libfmt-dev libpng-dev
+  cyclonedds-dev
 )
 # Debian 12's libyaml-cpp-dev is not Multi-Arch: same, so its ARM build cannot be installed beside
 # the amd64 one. We install the ARM runtime library with apt and unpack the ARM -dev package (CMake

@@ -16,6 +16,7 @@ packages=(
   libcli11-dev                                   # command-line parsing
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
+  cyclonedds-dev cyclonedds-tools                # ROS 2 odometry over DDS (--ros2); idlc generates the message types
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
   python3                                        # the MCAP reader test (tests/mcap_reader.py: standard library only)

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "drivers/ros2/ros2_names.h"
 #include "formats/calib/calibration_io.h"
 #include "formats/trajectory/trajectory_io.h"
 #include "pipeline/runtime/chrome_trace.h"
@@ -15,6 +16,32 @@
 namespace voca_rt::detail {
 
 namespace pl = voca::pipeline;
+
+namespace {
+
+voca::ros2::OdometryPublisherOptions ros2Options(const Ros2Output& output) {
+  voca::ros2::OdometryPublisherOptions ros2;
+  ros2.topic = voca::ros2::fullyQualifiedTopicName(output.topic, "--ros2-topic");
+  voca::ros2::checkFrameId(output.odom_frame, "--ros2-odom-frame");
+  voca::ros2::checkFrameId(output.base_frame, "--ros2-base-frame");
+  if (output.odom_frame == output.base_frame) {
+    throw voca::InputError(fmt::format(
+        "--ros2-odom-frame and --ros2-base-frame: both are \"{}\"; a transform needs two frames", output.odom_frame));
+  }
+  ros2.odom_frame = output.odom_frame;
+  ros2.base_frame = output.base_frame;
+  if (output.domain_id < 0) {
+    ros2.domain_id = voca::ros2::domainIdFromEnvironment();
+  } else if (output.domain_id > static_cast<int>(voca::ros2::kMaxDomainId)) {
+    throw voca::InputError(
+        fmt::format("ROS 2 domain {}: expected 0 to {}", output.domain_id, voca::ros2::kMaxDomainId));
+  } else {
+    ros2.domain_id = static_cast<std::uint32_t>(output.domain_id);
+  }
+  return ros2;
+}
+
+}  // namespace
 
 pl::VoRunOptions runOptions(const Options& options, bool realtime, double speed) {
   pl::VoRunOptions run;
@@ -50,6 +77,7 @@ pl::VoRunOptions runOptions(const Options& options, bool realtime, double speed)
   run.trajectory_file = options.trajectory_file;
   run.trajectory_format = *format;
   run.progress = options.progress;
+  if (options.ros2) run.ros2 = ros2Options(*options.ros2);
   // A library answers its caller, not the process's signals: without a stop request of the caller's
   // only finish() and the destructor stop a run.
   run.pipeline_options.stop_requested = options.stop_requested ? options.stop_requested : [] { return false; };
@@ -167,6 +195,7 @@ Summary summary(const pl::VoRunResult& result, bool estimate) {
   }
   s.failure = result.failure;
   s.warnings = result.warnings;
+  s.ros2_summary = result.ros2_summary;
   s.report = estimate ? pl::formatRunSummary(result) : pl::formatTrackSummary(result, result.config.frontend);
   if (result.started) s.latency_report = pl::formatLatencyReport(report);
   return s;

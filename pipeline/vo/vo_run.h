@@ -11,6 +11,7 @@
 
 #include "drivers/decode/decoder_kind.h"
 #include "drivers/encode/live_encoder.h"
+#include "drivers/ros2/odometry_publisher.h"
 #include "drivers/source/stereo_source.h"
 #include "formats/config/config.h"
 #include "formats/trajectory/trajectory_io.h"
@@ -52,6 +53,9 @@ struct VoRunOptions {
   std::filesystem::path overlay_file;     // .mp4 of the left camera with the tracks drawn
   bool keep_trajectory = true;            // in memory too (for evaluation and callers)
   std::vector<FrameSink*> extra_sinks;    // also given every finished frame, after the built-in sinks
+  // ROS 2 (--ros2): every tracked pose as nav_msgs/Odometry and the odom -> base transform on /tf over
+  // DDS, written by a thread of its own (pipeline/sinks/ros2_sink.h). Needs estimate.
+  std::optional<ros2::OdometryPublisherOptions> ros2;
 
   // How to run.
   PipelineOptions pipeline_options;  // threads, pins, scheduling, memory locking, trace file, stop request
@@ -91,6 +95,7 @@ struct VoRunResult {
   // a run stopped while encoding or waiting for its stream; files at those paths are not its own.
   bool started = false;
   std::vector<std::string> warnings;
+  std::string ros2_summary;  // what --ros2 published, one line (Ros2Sink::summary); empty without it
   // Why the run estimated nothing (every frame lost), with a hint at the cause; empty otherwise.
   // Commands report it as an error and exit non-zero: the trajectory holds no estimate.
   std::string failure;

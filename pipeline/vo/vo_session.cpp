@@ -11,6 +11,7 @@
 #include "drivers/encode/video_encoder.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/progress_sink.h"
+#include "pipeline/sinks/ros2_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
 #include "pipeline/stages/decode_stage.h"
 #include "pipeline/stages/encode_stage.h"
@@ -74,6 +75,7 @@ struct VoSession::Impl {
   std::unique_ptr<StatisticsSink> statistics;
   std::unique_ptr<OverlaySink> overlay;
   std::unique_ptr<ProgressSink> progress;
+  std::unique_ptr<Ros2Sink> ros2;
   std::unique_ptr<SinkStage> sink;
   std::unique_ptr<Pipeline> pipeline;
   StagePositions positions;
@@ -188,6 +190,12 @@ void VoSession::Impl::build(const StereoRig& rig) {
                                        tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
+  if (options.ros2) {
+    if (!options.estimate) throw InputError("ROS 2 odometry needs poses: a tracking-only run estimates none");
+    ros2 = std::make_unique<Ros2Sink>(*options.ros2);
+    ros2->start();
+    sinks.push_back(ros2.get());
+  }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
   sink = std::make_unique<SinkStage>(sinks);
   chain.push_back(sink.get());
@@ -235,6 +243,21 @@ void VoSession::Impl::collect() {
   result.rows = statistics->rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : report.warnings) result.warnings.push_back(warning);
+  if (ros2) {
+    ros2->finish();  // done by the sink stage already, unless the run failed before it
+    result.ros2_summary = ros2->summary();
+    const Ros2Sink::Counters published = ros2->counters();
+    if (published.dropped > 0) {
+      result.warnings.push_back(
+          fmt::format("ROS 2: {} odometry messages dropped: the publisher thread fell behind (a slow network or "
+                      "subscriber)",
+                      published.dropped));
+    }
+    if (published.failed > 0) {
+      result.warnings.push_back(
+          fmt::format("ROS 2: {} odometry messages not published: {}", published.failed, ros2->firstError()));
+    }
+  }
   if (options.estimate && !report.stopped && !report.error && result.frames > 0 && result.backend.keyframes == 0 &&
       result.backend.lost >= result.frames) {
     result.failure = noEstimateReason(result, options.max_points);

@@ -10,6 +10,7 @@
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/ros2_cli.h"
 #include "voca/core/error.h"
 #include "voca_rt/run.h"
 
@@ -23,6 +24,7 @@ struct LiveOptions {
   int max_points = 1000;
   bool track_only = false;
   voca::cli::PipelineCli pipeline;
+  voca::cli::Ros2Cli ros2;
 };
 
 int runLive(const LiveOptions& o) {
@@ -35,6 +37,8 @@ int runLive(const LiveOptions& o) {
   options.estimate = !o.track_only;
   options.trajectory_file = o.out;
   options.trajectory_format = o.format;
+  if (o.ros2.enabled && o.track_only) throw voca::InputError("--ros2 publishes poses; --track-only estimates none");
+  voca::cli::applyRos2Options(o.ros2, options);
   voca_rt::CameraInput cameras;
   cameras.devices = o.camera.devices;
   cameras.size = o.camera.size;
@@ -48,6 +52,7 @@ int runLive(const LiveOptions& o) {
   voca::platform::installStopHandlers();
   const voca_rt::Summary summary = voca_rt::runCameras(cameras, options);
   std::fputs(summary.report.c_str(), stdout);
+  voca::cli::printRos2Summary(summary);
   if (!o.out.empty()) fmt::print("trajectory: {} ({}, body frame of the calibration)\n", o.out, o.format);
   return voca::cli::reportRunEnd(summary, o.pipeline, "live");
 }
@@ -70,11 +75,12 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
       app.add_flag("--track-only", o->track_only, "Frontend only: track features, estimate no poses");
       voca::cli::addPipelineOptions(app, o->pipeline);
+      voca::cli::addRos2Options(app, o->ros2);
       app.footer(voca::cli::cameraHelpFooter() + "\n\n" +
                  "Live input always runs with the live policy: when a stage falls behind, the oldest waiting frame\n"
                  "is dropped and counted (--profile lists drops per stage). Timestamps are the cameras' kernel\n"
                  "timestamps, so the trajectory lines up with other sensors on CLOCK_MONOTONIC.\n\n" +
-                 voca::cli::pipelineHelpFooter());
+                 voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter());
       return [o] { return runLive(*o); };
     },
 });

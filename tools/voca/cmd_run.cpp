@@ -9,6 +9,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/ros2_cli.h"
 #include "voca/core/error.h"
 #include "voca_rt/run.h"
 
@@ -23,6 +24,7 @@ struct RunOptions {
   int max_points = 1000;
   double stream_timeout = 3.0, stream_wait = 30.0;
   voca::cli::PipelineCli pipeline;
+  voca::cli::Ros2Cli ros2;
 };
 
 int runRun(const RunOptions& o) {
@@ -35,6 +37,7 @@ int runRun(const RunOptions& o) {
   if (o.out.empty()) throw voca::InputError("--out: an empty path; name the trajectory file to write");
   options.trajectory_file = o.out;
   options.trajectory_format = o.format;
+  voca::cli::applyRos2Options(o.ros2, options);
   voca_rt::Input input;
   input.path = o.input;
   input.ground_truth = o.gt;
@@ -48,6 +51,7 @@ int runRun(const RunOptions& o) {
   voca::platform::installStopHandlers();
   const voca_rt::Summary summary = voca_rt::run(input, options);
   std::fputs(summary.report.c_str(), stdout);
+  voca::cli::printRos2Summary(summary);
   if (summary.started) {
     fmt::print("trajectory: {} ({}, {})\n", o.out, o.format,
                o.format == "kitti" ? "left camera's poses" : "body frame of the calibration");
@@ -99,6 +103,7 @@ const bool registered = voca::cli::registerCommand({
                      "Stream URL: seconds without data that end the run (the sender has stopped)")
           ->capture_default_str();
       voca::cli::addPipelineOptions(app, o->pipeline);
+      voca::cli::addRos2Options(app, o->ros2);
       app.footer(
           "Each frame is tracked, then estimated, and its pose written as it was estimated then (causal; later\n"
           "window refinements never rewrite it). Poses are in the calibration's body frame (T_world_body =\n"
@@ -110,7 +115,7 @@ const bool registered = voca::cli::registerCommand({
           "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly. A stream recorded to a file\n"
           "(`voca stream seq out.ts`, or file:///path/out.ts) replays like a dataset: every frame, as fast as\n"
           "the pipeline goes (--realtime paces it at its stamps).\n\n" +
-          voca::cli::pipelineHelpFooter());
+          voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter());
       return [o] { return runRun(*o); };
     },
 });

@@ -78,6 +78,14 @@ VOCA_RT_API std::string tumRow(const Pose& pose);
 // must not block (the pipeline waits for it); copy the pose out and work elsewhere.
 using PoseCallback = std::function<void(const Pose& pose)>;
 
+// Where ROS 2 odometry goes (Options::ros2), as `voca run --ros2` and its --ros2-* options.
+struct Ros2Output {
+  std::string topic = "/odom";           // nav_msgs/msg/Odometry; relative names are in the root namespace
+  std::string odom_frame = "odom";       // header.frame_id: the first frame's body pose
+  std::string base_frame = "base_link";  // child_frame_id: the calibration's body frame
+  int domain_id = -1;                    // the DDS domain, 0 to 232; -1: ROS_DOMAIN_ID (unset: 0)
+};
+
 struct Options {
   // The stereo calibration: a file (Basalt JSON, Kalibr YAML, EuRoC sensor.yaml, KITTI calib.txt), or
   // a value (used when it has cameras).
@@ -123,6 +131,9 @@ struct Options {
   std::string statistics_file;            // JSON, written when the run ends
   std::string trace_file;                 // Chrome trace-event JSON of every frame's stages
   bool progress = false;                  // progress lines on stderr
+  // Each tracked pose published into a ROS 2 graph over DDS (Cyclone DDS; ROS itself not needed) as
+  // odometry and on /tf, by a thread of its own that never holds the pipeline up. Needs estimate.
+  std::optional<Ros2Output> ros2;
 
   // Polled between frames: true stops the run as Ctrl-C stops the command line (what was estimated
   // is kept). Empty: only finish() or the destructor stop it.
@@ -153,6 +164,7 @@ struct Summary {
   std::vector<std::string> warnings;
   std::string report;          // the summary as `voca run` prints it
   std::string latency_report;  // the latency table of `voca run --profile`
+  std::string ros2_summary;    // with Options::ros2: what was published, one line
 };
 
 class VOCA_RT_API Odometry {
