@@ -8,6 +8,13 @@
 
 namespace voca::pipeline {
 
+// What a sink reads of a frame beyond what every run fills (images, tracks, pose, timings): the
+// stages copy these only when a sink asks, so runs without such a sink pay nothing for them.
+struct FrameSinkNeeds {
+  bool left_traces = false;  // FrameSlot::left_traces
+  bool landmarks = false;    // FrameSlot::landmarks_world
+};
+
 // A consumer of finished frames. consume() is called once per frame in order; finish() once at the
 // end (also after a stop or a failure), and writes what the sink still holds.
 class FrameSink {
@@ -15,6 +22,8 @@ class FrameSink {
   virtual ~FrameSink() = default;
   virtual void consume(const FrameSlot& slot) = 0;
   virtual void finish() {}
+  // Asked once, before the run starts.
+  virtual FrameSinkNeeds needs() const { return {}; }
 };
 
 class SinkStage final : public Stage {
