@@ -16,6 +16,7 @@ packages=(
   libcli11-dev                                   # command-line parsing
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
+  libwebsocketpp-dev libasio-dev                 # live view (--view): Foxglove WebSocket server, header-only
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
 )
