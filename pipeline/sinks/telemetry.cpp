@@ -137,20 +137,22 @@ TelemetryEncoder::TelemetryEncoder(const TelemetryOptions& options)
 
 TelemetryEncoder::~TelemetryEncoder() = default;
 
+void TelemetryEncoder::addPose(std::int64_t t_ns, const SE3d& T_world_body) {
+  path_.add(T_world_body);
+  if (const std::optional<SE3d> T_gtworld_body = interpolatePose(ground_truth_, t_ns)) {
+    if (!aligned_) {
+      T_odom_gtworld_ = T_world_body * T_gtworld_body->inverse();
+      aligned_ = true;
+    }
+    ground_truth_path_.add(T_odom_gtworld_ * *T_gtworld_body);
+  }
+}
+
 void TelemetryEncoder::encode(const TelemetrySnapshot& s, const Publish& publish) {
   const auto wants = [&](TelemetryChannel channel) { return s.channels.test(channelBit(channel)); };
   const auto send = [&](TelemetryChannel channel) { publish(channel, s.t_ns, json_); };
   const std::int64_t t = s.t_ns;
-  if (s.has_pose) {
-    path_.add(s.T_world_body);
-    if (const std::optional<SE3d> T_gtworld_body = interpolatePose(ground_truth_, t)) {
-      if (!aligned_) {
-        T_odom_gtworld_ = s.T_world_body * T_gtworld_body->inverse();
-        aligned_ = true;
-      }
-      ground_truth_path_.add(T_odom_gtworld_ * *T_gtworld_body);
-    }
-  }
+  if (s.has_pose) addPose(t, s.T_world_body);
   if (wants(TelemetryChannel::kImage) && !s.left.empty()) {
     renderTrackOverlay(s.left, s.traces, s.observations, overlay_);
     foxglove::writeCompressedImage(t, kLeftCameraFrame, "jpeg", jpeg_->encode(overlay_.view()), json_);

@@ -129,9 +129,11 @@ class TelemetryEncoder {
   explicit TelemetryEncoder(const TelemetryOptions& options);
   ~TelemetryEncoder();
 
-  // Give it every snapshot of the run, in order: the paths take each one's pose, whether or not the
-  // snapshot asks for them to be published. Publishes the snapshot's channels.
+  // Give it every frame of the run, in order, as a snapshot or (a frame nobody wants messages of) as
+  // its pose alone: the paths take each pose, whether or not a snapshot asks for them to be published.
+  // Publishes the snapshot's channels.
   void encode(const TelemetrySnapshot& snapshot, const Publish& publish);
+  void addPose(std::int64_t t_ns, const SE3d& T_world_body);
 
   bool hasGroundTruth() const { return !ground_truth_.poses.empty(); }
 
