@@ -18,6 +18,7 @@
 #include "formats/eval/eval_report_json.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
+#include "pipeline/sinks/view_sink.h"
 #include "pipeline/stages/decode_stage.h"
 #include "pipeline/stages/estimation_stages.h"
 #include "pipeline/stages/source_stage.h"
@@ -403,6 +404,21 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   // Decoded frames carry motion vectors; the decode stage marks every frame it hands on.
   result.has_motion = info.kind == SourceKind::kEncoded;
 
+  // The live view, before any output is opened: an address that cannot be bound stops the run here.
+  std::unique_ptr<view::FoxgloveServer> own_view_server;
+  view::FoxgloveServer* view_server = options.view.server;
+  if (view_server == nullptr && !options.view.address.empty()) {
+    own_view_server = startViewServer(options.view.address, options.view.image_rate_hz, stderr);
+    view_server = own_view_server.get();
+  }
+  // What sinks read beyond the basics, so the stages copy it only then.
+  FrameSinkNeeds needs;
+  for (const FrameSink* extra : options.extra_sinks) {
+    needs.left_traces = needs.left_traces || extra->needs().left_traces;
+    needs.landmarks = needs.landmarks || extra->needs().landmarks;
+  }
+  if (view_server != nullptr) needs = {.left_traces = true, .landmarks = true};
+
   // The stages, in data-flow order; positions count the source as 0.
   SourceStageOptions source_options;
   source_options.realtime = options.realtime;
@@ -432,13 +448,14 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   DepthHintChannel hints;
   result.frontend_camera_threads = frontendCameraThreads(options);
   FrontendStage frontend(result.config.frontend, rig, {.max_points = options.max_points}, uses_depth ? &hints : nullptr,
-                         !options.overlay_file.empty(), result.frontend_camera_threads);
+                         !options.overlay_file.empty() || needs.left_traces, result.frontend_camera_threads);
   chain.push_back(&frontend);
   const int frontend_position = static_cast<int>(chain.size());
   std::unique_ptr<BackendStage> backend;
   int backend_position = -1;
   if (options.estimate) {
-    backend = std::make_unique<BackendStage>(result.config.backend, rig, uses_depth ? &hints : nullptr);
+    backend =
+        std::make_unique<BackendStage>(result.config.backend, rig, uses_depth ? &hints : nullptr, needs.landmarks);
     chain.push_back(backend.get());
     backend_position = static_cast<int>(chain.size());
   }
@@ -472,13 +489,29 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                        tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
+  const int max_landmarks = backend && needs.landmarks ? backend->landmarkCapacity() : 0;
+  std::unique_ptr<ViewSink> view;
+  if (view_server != nullptr) {
+    view = std::make_unique<ViewSink>(*view_server,
+                                      ViewSinkOptions{.width = info.width,
+                                                      .height = info.height,
+                                                      .max_points = options.max_points,
+                                                      .max_landmarks = max_landmarks,
+                                                      .stages = {.decode = decode_position,
+                                                                 .frontend = frontend_position,
+                                                                 .backend = backend_position,
+                                                                 .sink = static_cast<int>(chain.size()) + 1},
+                                                      .ground_truth = ground_truth ? &*ground_truth : nullptr});
+    view->start();
+    sinks.push_back(view.get());
+  }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
   SinkStage sink(sinks);
   chain.push_back(&sink);
 
   PipelineOptions pipeline_options = options.pipeline;
   pipeline_options.live_policy = options.pipeline.live_policy || options.realtime || info.live;
-  pipeline_options.slot_shape = {info.width, info.height, options.max_points};
+  pipeline_options.slot_shape = {info.width, info.height, options.max_points, max_landmarks};
   pipeline_options.stop_requested = stop_requested;
   Pipeline pipeline(source_stage, chain, pipeline_options);
   result.started = true;

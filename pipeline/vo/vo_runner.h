@@ -24,7 +24,22 @@
 #include "pipeline/sinks/statistics_sink.h"
 #include "voca/eval/evaluate.h"
 
+namespace voca::view {
+class FoxgloveServer;
+}  // namespace voca::view
+
 namespace voca::pipeline {
+
+// The live view (`--view`, pipeline/sinks/view_sink.h): the run's telemetry to Foxglove, Lichtblick
+// and the built-in page.
+struct ViewRunOptions {
+  // A server the caller started (startViewServer), published to for this run; `voca demo` keeps one
+  // for both of its runs. Else, when address ("[host:]port") is set, the run starts its own before
+  // anything is written (an address that cannot be bound is an InputError) and closes it at the end.
+  view::FoxgloveServer* server = nullptr;
+  std::string address;
+  double image_rate_hz = 10.0;  // for a server the run starts
+};
 
 struct VoRunOptions {
   // Input: a dataset folder, or a stream URL (udp://127.0.0.1:5000) that `voca stream` sends to.
@@ -52,6 +67,7 @@ struct VoRunOptions {
   std::filesystem::path overlay_file;     // .mp4 of the left camera with the tracks drawn
   bool keep_trajectory = true;            // in memory too (for evaluation and callers)
   std::vector<FrameSink*> extra_sinks;    // also given every finished frame, after the built-in sinks
+  ViewRunOptions view;                    // live view; off unless a server or an address is given
 
   // How to run.
   PipelineOptions pipeline;  // threads, pins, scheduling, memory locking, trace file, stop request

@@ -19,6 +19,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -33,6 +34,7 @@ struct DemoOptions {
   std::string bitrate = "500k";
   int threads = 2;
   bool reuse = false;
+  voca::cli::ViewCli view;
 };
 
 // Runs another registered subcommand (synth, encode, track) as if typed on the command line, so the
@@ -80,6 +82,8 @@ int runDemo(const DemoOptions& o) {
   if (o.seconds < 2.0 || o.seconds > 120.0) throw voca::InputError("--seconds: expected 2 to 120");
   if (o.threads < 1) throw voca::InputError(fmt::format("--threads {}: expected 1 or more", o.threads));
   voca::encode::parseBitrate(o.bitrate);
+  // One server for the whole demo, from its start: a viewer connects once and sees both runs.
+  const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
   // Ctrl-C in any step ends the demo the clean way (the steps stop at a frame boundary).
   voca::platform::installStopHandlers();
   const auto start = std::chrono::steady_clock::now();
@@ -149,6 +153,7 @@ int runDemo(const DemoOptions& o) {
     options.progress = false;
     v.trajectory = out / fmt::format("traj_{}.txt", voca::priorModeName(v.mode));
     options.trajectory_file = v.trajectory;
+    options.view.server = view.get();
     v.result = voca::pipeline::runVisualOdometry(options);
     if (v.result.pipeline.error || v.result.stop_signal != 0) {
       voca::cli::PipelineCli defaults;
@@ -221,11 +226,14 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--bitrate", o->bitrate, "Encoding bitrate per camera")->capture_default_str();
       app.add_option("--threads", o->threads, "Rendering threads")->capture_default_str();
       app.add_flag("--reuse", o->reuse, "Reuse the sequences already rendered and encoded in --out");
+      voca::cli::addViewOptions(app, o->view);
       app.footer(
           "Steps: `voca synth` (ray-cast room, exact ground truth), `voca encode` (libx264, the paper's\n"
           "settings), then the full VO on the decoded video twice: `none` (Basalt's KLT from the previous\n"
           "position) and `mv_parallel_of` (VOCA: codec motion vectors and optical flow in parallel), and\n"
-          "`voca track --overlay` for a video of the tracks. ATE/RTE are computed as the paper does.");
+          "`voca track --overlay` for a video of the tracks. ATE/RTE are computed as the paper does.\n\n" +
+          voca::cli::viewHelpFooter() +
+          "\nThe demo keeps one server for both runs; the page starts its graphs over when the second begins.");
       return [o] { return runDemo(*o); };
     },
 });

@@ -11,6 +11,7 @@
 #include "tools/voca/camera_cli.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -23,6 +24,7 @@ struct LiveOptions {
   int max_points = 1000;
   bool track_only = false;
   voca::cli::PipelineCli pipeline;
+  voca::cli::ViewCli view;
 };
 
 int runLive(const LiveOptions& o) {
@@ -40,6 +42,9 @@ int runLive(const LiveOptions& o) {
   run.trajectory_format = *format;
   voca::cli::applyPipelineOptions(o.pipeline, run);
   if (run.realtime) throw voca::InputError("--realtime: cameras are live already (it paces recorded input)");
+  // Bound before the cameras open: a port in use fails at once, with nothing written.
+  const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
+  run.view.server = view.get();
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometryOnCameras(options);
   voca::pipeline::printRunSummary(result, stdout);
@@ -65,11 +70,12 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--max-points", o->max_points, "Frontend points per camera (capacity)")->capture_default_str();
       app.add_flag("--track-only", o->track_only, "Frontend only: track features, estimate no poses");
       voca::cli::addPipelineOptions(app, o->pipeline);
+      voca::cli::addViewOptions(app, o->view);
       app.footer(voca::cli::cameraHelpFooter() + "\n\n" +
                  "Live input always runs with the live policy: when a stage falls behind, the oldest waiting frame\n"
                  "is dropped and counted (--profile lists drops per stage). Timestamps are the cameras' kernel\n"
                  "timestamps, so the trajectory lines up with other sensors on CLOCK_MONOTONIC.\n\n" +
-                 voca::cli::pipelineHelpFooter());
+                 voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::viewHelpFooter());
       return [o] { return runLive(*o); };
     },
 });

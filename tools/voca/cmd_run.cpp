@@ -10,6 +10,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -23,6 +24,7 @@ struct RunOptions {
   int max_points = 1000;
   double stream_timeout = 3.0, stream_wait = 30.0;
   voca::cli::PipelineCli pipeline;
+  voca::cli::ViewCli view;
 };
 
 int runRun(const RunOptions& o) {
@@ -53,6 +55,9 @@ int runRun(const RunOptions& o) {
   options.trajectory_file = o.out;
   options.trajectory_format = *format;
   voca::cli::applyPipelineOptions(o.pipeline, options);
+  // Bound before the input is opened or encoded: a port in use fails at once, with nothing written.
+  const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
+  options.view.server = view.get();
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
   voca::pipeline::printRunSummary(result, stdout);
@@ -107,6 +112,7 @@ const bool registered = voca::cli::registerCommand({
                      "Stream URL: seconds without data that end the run (the sender has stopped)")
           ->capture_default_str();
       voca::cli::addPipelineOptions(app, o->pipeline);
+      voca::cli::addViewOptions(app, o->view);
       app.footer(
           "Each frame is tracked, then estimated, and its pose written as it was estimated then (causal; later\n"
           "window refinements never rewrite it). Poses are in the calibration's body frame (T_world_body =\n"
@@ -118,7 +124,7 @@ const bool registered = voca::cli::registerCommand({
           "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly. A stream recorded to a file\n"
           "(`voca stream seq out.ts`, or file:///path/out.ts) replays like a dataset: every frame, as fast as\n"
           "the pipeline goes (--realtime paces it at its stamps).\n\n" +
-          voca::cli::pipelineHelpFooter());
+          voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::viewHelpFooter());
       return [o] { return runRun(*o); };
     },
 });

@@ -1,0 +1,36 @@
+#include "tools/voca/view_cli.h"
+
+#include <fmt/core.h>
+
+#include "pipeline/sinks/view_sink.h"
+
+namespace voca::cli {
+
+void addViewOptions(CLI::App& app, ViewCli& cli) {
+  app.add_option("--view", cli.address,
+                 "Serve the run live on [host:]port (a port alone listens on every interface; port 0 picks a free\n"
+                 "one): a web page at http://host:port/ and the Foxglove WebSocket protocol at ws://host:port");
+  app.add_option("--view-image-rate", cli.image_rate_hz,
+                 fmt::format("With --view: camera images per second at most (0 to {}; clients may change it)",
+                             pipeline::kViewMaxImageRateHz))
+      ->capture_default_str();
+}
+
+std::unique_ptr<view::FoxgloveServer> startView(const ViewCli& cli) {
+  if (cli.address.empty()) return nullptr;
+  return pipeline::startViewServer(cli.address, cli.image_rate_hz, stderr);
+}
+
+std::string viewHelpFooter() {
+  return "Live view (--view [host:]port): open http://host:port/ in a browser for the left camera with its tracks,\n"
+         "a top view of the path (and the ground truth when the input has one) and a graph of the latency per\n"
+         "stage; or, in Foxglove or Lichtblick, Open connection -> Foxglove WebSocket -> ws://host:port for the\n"
+         "same channels: /voca/camera/left/compressed (image with tracks), /voca/camera/left/motion_vectors\n"
+         "(image annotations), /voca/pose, /tf (odom -> base_link), /voca/path, /voca/ground_truth/path,\n"
+         "/voca/landmarks (point cloud) and /voca/stats (latency, tracks, drops). Images are drawn and encoded\n"
+         "only while a client subscribes to them, at most --view-image-rate per second (parameter\n"
+         "image_rate_hz); a client that reads too slowly misses messages rather than slowing the run, which\n"
+         "ends with its input as without --view.";
+}
+
+}  // namespace voca::cli
