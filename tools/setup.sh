@@ -19,6 +19,7 @@ packages=(
   libwebsocketpp-dev libasio-dev                 # live view (--view): Foxglove WebSocket server, header-only
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
+  python3-websockets python3-jsonschema python3-pil chromium  # live view tests: protocol client, schemas, the page in headless chromium
 )
 
 missing=()
