@@ -4,8 +4,10 @@
 // write thread consume() only copies what subscribed channels need into a free entry of a small ring
 // and hands it to the view's own thread through a bounded lock-free queue; with no free entry the
 // update is dropped and counted. That thread draws the tracks, encodes JPEG and JSON and publishes;
-// the server never waits for a client. The image channel (the expensive one) is drawn and encoded
-// only while a client subscribes, at most image_rate_hz times a second (a parameter clients may set).
+// the server never waits for a client. With no client subscribed, consume() only logs the pose (the
+// path a later client gets) in a queue the view's thread empties when it wakes, every 100 ms. The
+// image channel (the expensive one) is drawn and encoded only while a client subscribes, at most
+// image_rate_hz times a second (a parameter clients may set).
 
 #include <cstdint>
 #include <cstdio>
