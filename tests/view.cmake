@@ -6,6 +6,9 @@ voca_add_test(test_foxglove SOURCES test_foxglove.cpp LIBS voca_pipeline_sinks n
 # Counts operator new (own executable, since it replaces the global allocator).
 voca_add_test(test_foxglove_alloc SOURCES test_foxglove_alloc.cpp LIBS voca_pipeline_sinks)
 voca_add_test(test_view_server SOURCES test_view_server.cpp LIBS voca_drivers_view LABELS asan TIMEOUT 60)
+# The view through the runner's own options on a rendered raw sequence (renders with the `voca` binary).
+voca_add_test(test_view_run SOURCES test_view_run.cpp LIBS voca_pipeline_vo LABELS e2e TIMEOUT 600)
+add_dependencies(test_view_run voca)
 
 find_program(VOCA_SYSTEM_PYTHON3 python3 PATHS /usr/bin NO_DEFAULT_PATH)
 if(NOT VOCA_SYSTEM_PYTHON3)

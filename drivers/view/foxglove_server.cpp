@@ -644,6 +644,7 @@ void FoxgloveServer::stop() {
   }
   d.thread.join();
   const ServerCounters c = counters();
+  if (c.connections == 0 && c.pages_served == 0 && c.bad_requests == 0) return;  // nobody came: nothing to say
   d.log(
       fmt::format("closed: {} client session{}, {} page load{}, {} messages sent, {} dropped for slow clients, {} "
                   "requests refused",
