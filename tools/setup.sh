@@ -20,6 +20,7 @@ packages=(
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
   python3-websockets python3-jsonschema python3-pil chromium  # live view tests: protocol client, schemas, the page in headless chromium
+  python3                                        # the MCAP reader test (tests/mcap_reader.py: standard library only)
 )
 
 missing=()
