@@ -54,6 +54,10 @@ inline constexpr std::string_view kOdometryFrame = "odom";
 inline constexpr std::string_view kBodyFrame = "base_link";
 inline constexpr std::string_view kLeftCameraFrame = "cam0";
 
+// Camera images per second for a viewer or a recording (the image channel is the expensive one).
+inline constexpr double kTelemetryDefaultImageRateHz = 10.0;
+inline constexpr double kTelemetryMaxImageRateHz = 30.0;
+
 // Positions of the stages in FrameSlot::timing (-1: not in this pipeline).
 struct TelemetryStages {
   int decode = -1;

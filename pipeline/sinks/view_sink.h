@@ -22,8 +22,8 @@ namespace voca::pipeline {
 
 // The server's parameters (the protocol's "parameters" capability), by index.
 inline constexpr std::size_t kViewImageRateParameter = 0;  // "image_rate_hz"
-inline constexpr double kViewDefaultImageRateHz = 10.0;
-inline constexpr double kViewMaxImageRateHz = 30.0;
+inline constexpr double kViewDefaultImageRateHz = kTelemetryDefaultImageRateHz;
+inline constexpr double kViewMaxImageRateHz = kTelemetryMaxImageRateHz;
 
 // Starts the view's server on "[host:]port" with the telemetry channels, the built-in page and the
 // image rate parameter, and prints once where to open it ("view: http://host:port/ (Foxglove:

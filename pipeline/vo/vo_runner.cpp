@@ -16,6 +16,7 @@
 #include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"
 #include "formats/eval/eval_report_json.h"
+#include "pipeline/sinks/mcap_sink.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
 #include "pipeline/sinks/view_sink.h"
@@ -185,10 +186,11 @@ namespace {
 void requireOutputsApartFromInputs(const VoRunOptions& options, const Dataset* dataset,
                                    const std::optional<std::filesystem::path>& calibration,
                                    const std::optional<std::filesystem::path>& recording = std::nullopt) {
-  const std::array<NamedPath, 4> outputs = {NamedPath{"the trajectory file", options.trajectory_file},
+  const std::array<NamedPath, 5> outputs = {NamedPath{"the trajectory file", options.trajectory_file},
                                             NamedPath{"the statistics file", options.statistics_file},
                                             NamedPath{"the trace file", options.pipeline.trace_path},
-                                            NamedPath{"the overlay video", options.overlay_file}};
+                                            NamedPath{"the overlay video", options.overlay_file},
+                                            NamedPath{"the MCAP recording", options.mcap.file}};
   std::vector<NamedPath> inputs;
   if (dataset != nullptr) inputs = datasetReadPaths(*dataset);
   if (recording) inputs.push_back({"the recorded stream", *recording});
@@ -417,7 +419,7 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     needs.left_traces = needs.left_traces || extra->needs().left_traces;
     needs.landmarks = needs.landmarks || extra->needs().landmarks;
   }
-  if (view_server != nullptr) needs = {.left_traces = true, .landmarks = true};
+  if (view_server != nullptr || !options.mcap.file.empty()) needs = {.left_traces = true, .landmarks = true};
 
   // The stages, in data-flow order; positions count the source as 0.
   SourceStageOptions source_options;
@@ -460,6 +462,23 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
     backend_position = static_cast<int>(chain.size());
   }
 
+  const int max_landmarks = backend && needs.landmarks ? backend->landmarkCapacity() : 0;
+  // The recording first among the outputs: a file that cannot be created leaves no other behind.
+  std::unique_ptr<McapSink> recording;
+  if (!options.mcap.file.empty()) {
+    recording = std::make_unique<McapSink>(McapSinkOptions{.file = options.mcap.file,
+                                                           .width = info.width,
+                                                           .height = info.height,
+                                                           .max_points = options.max_points,
+                                                           .max_landmarks = max_landmarks,
+                                                           .stages = {.decode = decode_position,
+                                                                      .frontend = frontend_position,
+                                                                      .backend = backend_position,
+                                                                      .sink = static_cast<int>(chain.size()) + 1},
+                                                           .ground_truth = ground_truth ? &*ground_truth : nullptr,
+                                                           .image_rate_hz = options.mcap.image_rate_hz});
+  }
+
   const auto expected = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
   // Live input has no known length: keep an hour of rows at 30 Hz in memory and count the rest.
   const std::size_t capacity = expected > 0 ? expected : 30 * 3600;
@@ -489,7 +508,6 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                        tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
-  const int max_landmarks = backend && needs.landmarks ? backend->landmarkCapacity() : 0;
   std::unique_ptr<ViewSink> view;
   if (view_server != nullptr) {
     view = std::make_unique<ViewSink>(*view_server,
@@ -504,6 +522,10 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
                                                       .ground_truth = ground_truth ? &*ground_truth : nullptr});
     view->start();
     sinks.push_back(view.get());
+  }
+  if (recording) {
+    recording->start();
+    sinks.push_back(recording.get());
   }
   sinks.insert(sinks.end(), options.extra_sinks.begin(), options.extra_sinks.end());
   SinkStage sink(sinks);
@@ -525,6 +547,15 @@ VoRunResult runVisualOdometryOn(StereoSource& source, const StereoRig& rig, cons
   result.rows = statistics.rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : result.pipeline.warnings) result.warnings.push_back(warning);
+  if (recording) {
+    recording->finish();  // done by the sink stage already, unless the run failed before it
+    if (!recording->failure().empty()) result.warnings.push_back(recording->failure());
+    if (recording->dropped() > 0 || recording->imagesSkipped() > 0) {
+      result.warnings.push_back(fmt::format(
+          "MCAP recording {}: the recorder fell behind: {} frames not recorded, {} recorded without their image",
+          options.mcap.file.string(), recording->dropped(), recording->imagesSkipped()));
+    }
+  }
   if (options.estimate && !result.pipeline.stopped && !result.pipeline.error && result.frames > 0 &&
       result.backend.keyframes == 0 && result.backend.lost >= result.frames) {
     result.failure = noEstimateReason(result, options.max_points);

@@ -41,6 +41,13 @@ struct ViewRunOptions {
   double image_rate_hz = 10.0;  // for a server the run starts
 };
 
+// The recording (`--mcap`, pipeline/sinks/mcap_sink.h): the live view's channels written to an MCAP file
+// as the run goes. A write error stops the recording, not the run (a warning says so).
+struct McapRunOptions {
+  std::filesystem::path file;  // empty: no recording
+  double image_rate_hz = 10.0;  // camera images per second of the frames' time, 0 to 30
+};
+
 struct VoRunOptions {
   // Input: a dataset folder, or a stream URL (udp://127.0.0.1:5000) that `voca stream` sends to.
   std::filesystem::path input;
@@ -68,6 +75,7 @@ struct VoRunOptions {
   bool keep_trajectory = true;            // in memory too (for evaluation and callers)
   std::vector<FrameSink*> extra_sinks;    // also given every finished frame, after the built-in sinks
   ViewRunOptions view;                    // live view; off unless a server or an address is given
+  McapRunOptions mcap;                    // recording; off unless a file is given
 
   // How to run.
   PipelineOptions pipeline;  // threads, pins, scheduling, memory locking, trace file, stop request

@@ -45,6 +45,7 @@ int runLive(const LiveOptions& o) {
   // Bound before the cameras open: a port in use fails at once, with nothing written.
   const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
   run.view.server = view.get();
+  run.mcap = voca::cli::mcapRunOptions(o.view);
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometryOnCameras(options);
   voca::pipeline::printRunSummary(result, stdout);

@@ -58,6 +58,7 @@ int runRun(const RunOptions& o) {
   // Bound before the input is opened or encoded: a port in use fails at once, with nothing written.
   const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
   options.view.server = view.get();
+  options.mcap = voca::cli::mcapRunOptions(o.view);
   voca::platform::installStopHandlers();
   const voca::pipeline::VoRunResult result = voca::pipeline::runVisualOdometry(options);
   voca::pipeline::printRunSummary(result, stdout);
