@@ -17,8 +17,10 @@ packages=(
   libfmt-dev                                     # formatting (GCC 12 has no std::format)
   libpng-dev                                     # PNG datasets
   cyclonedds-dev cyclonedds-tools                # ROS 2 odometry over DDS (--ros2); idlc generates the message types
+  libwebsocketpp-dev libasio-dev                 # live view (--view): Foxglove WebSocket server, header-only
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
+  python3-websockets python3-jsonschema python3-pil chromium  # live view tests: protocol client, schemas, the page in headless chromium
   python3                                        # the MCAP reader test (tests/mcap_reader.py: standard library only)
 )
 

@@ -78,6 +78,10 @@ pl::VoRunOptions runOptions(const Options& options, bool realtime, double speed)
   run.trajectory_format = *format;
   run.progress = options.progress;
   if (options.ros2) run.ros2 = ros2Options(*options.ros2);
+  run.view.address = options.view_address;
+  run.view.image_rate_hz = options.view_image_rate_hz;
+  run.mcap.file = options.mcap_file;
+  run.mcap.image_rate_hz = options.view_image_rate_hz;
   // A library answers its caller, not the process's signals: without a stop request of the caller's
   // only finish() and the destructor stop a run.
   run.pipeline_options.stop_requested = options.stop_requested ? options.stop_requested : [] { return false; };

@@ -5,6 +5,7 @@
 #include "api/src/api_internal.h"
 #include "drivers/capture/camera_source.h"
 #include "drivers/encode/video_encoder.h"
+#include "pipeline/sinks/view_sink.h"
 #include "pipeline/vo/camera_runner.h"
 #include "pipeline/vo/vo_runner.h"
 
@@ -20,6 +21,15 @@ void requireFileCalibration(const Options& options, const char* call) {
         "{}: give the calibration as a file (Options::calibration_file); a calibration value is for pushed frames",
         call));
   }
+}
+
+// The view's server for the whole call, started before the input opens.
+std::unique_ptr<voca::view::FoxgloveServer> startView(pl::VoRunOptions& run) {
+  if (run.view.address.empty()) return nullptr;
+  std::unique_ptr<voca::view::FoxgloveServer> server =
+      pl::startViewServer(run.view.address, run.view.image_rate_hz, stderr);
+  run.view.server = server.get();
+  return server;
 }
 
 }  // namespace
@@ -46,6 +56,8 @@ Summary run(const Input& input, const Options& options, const PoseCallback& on_p
     }
     run.stream_timeout_s = input.stream_timeout_s;
     run.stream_start_timeout_s = input.stream_wait_s;
+    // Bound before the input is opened or encoded: a port in use fails at once, with nothing written.
+    const std::unique_ptr<voca::view::FoxgloveServer> view = startView(run);
     detail::PoseSink sink(on_pose, 0);
     run.extra_sinks = {&sink};
     return detail::summary(pl::runVisualOdometry(run), options.estimate);
@@ -73,6 +85,7 @@ Summary runCameras(const CameraInput& cameras, const Options& options, const Pos
     camera.calibration = options.calibration_file;
     if (!options.config.empty()) camera.config = options.config;
     camera.run = detail::runOptions(options);
+    const std::unique_ptr<voca::view::FoxgloveServer> view = startView(camera.run);
     detail::PoseSink sink(on_pose, 0);
     camera.run.extra_sinks = {&sink};
     return detail::summary(pl::runVisualOdometryOnCameras(camera), options.estimate);

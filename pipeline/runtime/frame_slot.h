@@ -45,12 +45,20 @@ struct FrameSlot {
   FrontendStats frontend_stats;
   std::vector<PointTrace> left_traces;  // the left camera's temporal step, kept for overlays
   PoseEstimate pose;                    // the backend's output
+  // The estimator's window landmarks in the world frame after this frame, filled by the backend stage
+  // only when a sink reads them (FrameSinkNeeds::landmarks); capacity fixed by reserve().
+  std::vector<Eigen::Vector3f> landmarks_world;
+  // Frames the pipeline dropped (live policy) and skipped as damaged since the start, as of this
+  // frame reaching the last stage (the sinks).
+  std::int64_t dropped_so_far = 0;
+  std::int64_t damaged_so_far = 0;
 
   // Source frame index of the frame (stamped by the source).
   std::int64_t frameIndex() const { return frame.frame_index; }
 
-  // Sizes every buffer for frames up to width x height and max_points points per camera.
-  void reserve(int width, int height, int max_points);
+  // Sizes every buffer for frames up to width x height, max_points points per camera and
+  // max_landmarks window landmarks (0: landmarks are not copied).
+  void reserve(int width, int height, int max_points, int max_landmarks = 0);
 };
 
 }  // namespace voca::pipeline

@@ -96,6 +96,9 @@ struct Pipeline::Impl final : StageContext {
   // dropping (the one with the frontend), so an even split per group would cut its list short.
   std::atomic<std::int64_t> release_records_left{static_cast<std::int64_t>(kMaxReleasedRecords)};
   std::atomic<bool> source_finished{false};
+  // Every drop and damaged frame so far, for the sinks (FrameSlot::dropped_so_far).
+  std::atomic<std::int64_t> dropped_total{0};
+  std::atomic<std::int64_t> damaged_total{0};
   std::optional<StageError> error;  // guarded by error_claimed
   std::atomic<bool> error_claimed{false};
   std::unique_ptr<ChromeTraceWriter> trace;
@@ -149,8 +152,14 @@ struct Pipeline::Impl final : StageContext {
 
   void release(int stage, FrameSlot& slot, ReleaseReason reason) {
     StageReport& r = reports[static_cast<std::size_t>(stage)];
-    if (reason == ReleaseReason::kDropped) ++r.dropped;
-    if (reason == ReleaseReason::kDamaged) ++r.damaged;
+    if (reason == ReleaseReason::kDropped) {
+      ++r.dropped;
+      dropped_total.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (reason == ReleaseReason::kDamaged) {
+      ++r.damaged;
+      damaged_total.fetch_add(1, std::memory_order_relaxed);
+    }
     if (reason == ReleaseReason::kDropped || reason == ReleaseReason::kDamaged) {
       auto& list = groups[static_cast<std::size_t>(group_of[static_cast<std::size_t>(stage)])].released;
       if (list.size() < list.capacity() && release_records_left.fetch_sub(1, std::memory_order_relaxed) > 0) {
@@ -174,6 +183,10 @@ struct Pipeline::Impl final : StageContext {
     t.start_ns = platform::monotonicNs();
     t.cpu_start_ns = platform::threadCpuNs();
     slot.owner_stage = stage;
+    if (stage == lastStage()) {
+      slot.dropped_so_far = dropped_total.load(std::memory_order_relaxed);
+      slot.damaged_so_far = damaged_total.load(std::memory_order_relaxed);
+    }
     try {
       stages[static_cast<std::size_t>(stage - 1)]->process(slot, emitters[static_cast<std::size_t>(stage)]);
     } catch (const std::exception& e) {
@@ -436,7 +449,9 @@ Pipeline::Pipeline(SourceStage& source, std::vector<Stage*> stages, PipelineOpti
     auto slot = std::make_unique<FrameSlot>();
     slot->pool_index = i;
     const SlotShape& shape = d.options.slot_shape;
-    if (shape.width > 0 && shape.height > 0) slot->reserve(shape.width, shape.height, shape.max_points);
+    if (shape.width > 0 && shape.height > 0) {
+      slot->reserve(shape.width, shape.height, shape.max_points, shape.max_landmarks);
+    }
     d.pool.push_back(std::move(slot));
   }
   for (std::size_t g = 0; g < d.groups.size(); ++g) {

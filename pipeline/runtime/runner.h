@@ -29,6 +29,7 @@ namespace voca::pipeline {
 struct SlotShape {
   int width = 0, height = 0;
   int max_points = 0;
+  int max_landmarks = 0;  // FrameSlot::landmarks_world; 0 when no sink reads them
 };
 
 struct PipelineOptions {

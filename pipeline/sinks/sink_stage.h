@@ -14,6 +14,13 @@ struct StagePositions {
   int encode = -1, decode = -1, frontend = -1, backend = -1, write = -1;
 };
 
+// What a sink reads of a frame beyond what every run fills (images, tracks, pose, timings): the
+// stages copy these only when a sink asks, so runs without such a sink pay nothing for them.
+struct FrameSinkNeeds {
+  bool left_traces = false;  // FrameSlot::left_traces
+  bool landmarks = false;    // FrameSlot::landmarks_world
+};
+
 // A consumer of finished frames. begin() is called once before the first frame with where the stages
 // are; consume() once per frame in order; finish() once at the end (also after a stop or a failure),
 // and writes what the sink still holds.
@@ -23,6 +30,8 @@ class FrameSink {
   virtual void begin(const StagePositions& /*positions*/) {}
   virtual void consume(const FrameSlot& slot) = 0;
   virtual void finish() {}
+  // Asked once, before the run starts.
+  virtual FrameSinkNeeds needs() const { return {}; }
 };
 
 class SinkStage final : public Stage {

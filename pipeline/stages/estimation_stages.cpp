@@ -89,12 +89,19 @@ void FrontendStage::process(FrameSlot& slot, Emitter& out) {
   out.forward(slot);
 }
 
-BackendStage::BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints)
-    : estimator_(config, rig), hints_(hints) {}
+BackendStage::BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints,
+                           bool copy_landmarks)
+    : estimator_(config, rig), hints_(hints), copy_landmarks_(copy_landmarks) {}
 
 void BackendStage::process(FrameSlot& slot, Emitter& out) {
   slot.pose = estimator_.process(slot.tracked);
   if (hints_ != nullptr) hints_->push(slot.pose.mean_depth_m);
+  if (copy_landmarks_) {
+    // Within the slot's reserved capacity: resizing never reallocates.
+    std::vector<Eigen::Vector3f>& points = slot.landmarks_world;
+    points.resize(points.capacity());
+    points.resize(estimator_.worldLandmarks(points));
+  }
   out.forward(slot);
 }
 

@@ -65,14 +65,18 @@ class FrontendStage final : public Stage {
 
 class BackendStage final : public Stage {
  public:
-  BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints);
+  // copy_landmarks: fill FrameSlot::landmarks_world (slots reserved for landmarkCapacity()) for a
+  // sink that reads them.
+  BackendStage(const BackendConfig& config, const StereoRig& rig, DepthHintChannel* hints, bool copy_landmarks = false);
   std::string_view name() const override { return "backend"; }
   int relativeCost() const override { return 4; }
   void process(FrameSlot& slot, Emitter& out) override;
+  int landmarkCapacity() const { return estimator_.landmarkCapacity(); }
 
  private:
   VoEstimator estimator_;
   DepthHintChannel* hints_;
+  bool copy_landmarks_;
 };
 
 }  // namespace voca::pipeline

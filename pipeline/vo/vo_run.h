@@ -21,7 +21,29 @@
 #include "voca/calib/calibration.h"
 #include "voca/eval/evaluate.h"
 
+namespace voca::view {
+class FoxgloveServer;
+}  // namespace voca::view
+
 namespace voca::pipeline {
+
+// The live view (`--view`, pipeline/sinks/view_sink.h): the run's telemetry to Foxglove, Lichtblick
+// and the built-in page.
+struct ViewRunOptions {
+  // A server the caller started (startViewServer), published to for this run; `voca demo` and the
+  // library keep one for the run's whole life. Else, when address ("[host:]port") is set, the session
+  // starts its own before anything is written (an address that cannot be bound is an InputError).
+  view::FoxgloveServer* server = nullptr;
+  std::string address;
+  double image_rate_hz = 10.0;  // for a server the session starts
+};
+
+// The recording (`--mcap`, pipeline/sinks/mcap_sink.h): the live view's channels written to an MCAP
+// file as the run goes. A write error stops the recording, not the run (a warning says so).
+struct McapRunOptions {
+  std::filesystem::path file;   // empty: no recording
+  double image_rate_hz = 10.0;  // camera images per second of the frames' time, 0 to 30
+};
 
 struct VoRunOptions {
   // Input: a dataset folder, or a stream URL (udp://127.0.0.1:5000) that `voca stream` sends to.
@@ -56,6 +78,8 @@ struct VoRunOptions {
   // ROS 2 (--ros2): every tracked pose as nav_msgs/Odometry and the odom -> base transform on /tf over
   // DDS, written by a thread of its own (pipeline/sinks/ros2_sink.h). Needs estimate.
   std::optional<ros2::OdometryPublisherOptions> ros2;
+  ViewRunOptions view;  // live view; off unless a server or an address is given
+  McapRunOptions mcap;  // recording; off unless a file is given
 
   // How to run.
   PipelineOptions pipeline_options;  // threads, pins, scheduling, memory locking, trace file, stop request

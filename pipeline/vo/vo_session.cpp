@@ -9,10 +9,12 @@
 #include <vector>
 
 #include "drivers/encode/video_encoder.h"
+#include "pipeline/sinks/mcap_sink.h"
 #include "pipeline/sinks/overlay_sink.h"
 #include "pipeline/sinks/progress_sink.h"
 #include "pipeline/sinks/ros2_sink.h"
 #include "pipeline/sinks/trajectory_sink.h"
+#include "pipeline/sinks/view_sink.h"
 #include "pipeline/stages/decode_stage.h"
 #include "pipeline/stages/encode_stage.h"
 #include "pipeline/stages/estimation_stages.h"
@@ -76,6 +78,9 @@ struct VoSession::Impl {
   std::unique_ptr<OverlaySink> overlay;
   std::unique_ptr<ProgressSink> progress;
   std::unique_ptr<Ros2Sink> ros2;
+  std::unique_ptr<view::FoxgloveServer> own_view_server;
+  std::unique_ptr<ViewSink> view;
+  std::unique_ptr<McapSink> recording;
   std::unique_ptr<SinkStage> sink;
   std::unique_ptr<Pipeline> pipeline;
   StagePositions positions;
@@ -109,6 +114,20 @@ void VoSession::Impl::build(const StereoRig& rig) {
   const bool encode_live = options.live_encode && info.kind == SourceKind::kRaw;
   // Decoded frames carry motion vectors; the decode stage marks every frame it hands on.
   result.has_motion = info.kind == SourceKind::kEncoded || encode_live;
+
+  // The live view, before any output is opened: an address that cannot be bound stops the run here.
+  view::FoxgloveServer* view_server = options.view.server;
+  if (view_server == nullptr && !options.view.address.empty()) {
+    own_view_server = startViewServer(options.view.address, options.view.image_rate_hz, stderr);
+    view_server = own_view_server.get();
+  }
+  // What sinks read beyond the basics, so the stages copy it only then.
+  FrameSinkNeeds needs;
+  for (const FrameSink* extra : options.extra_sinks) {
+    needs.left_traces = needs.left_traces || extra->needs().left_traces;
+    needs.landmarks = needs.landmarks || extra->needs().landmarks;
+  }
+  if (view_server != nullptr || !options.mcap.file.empty()) needs = {.left_traces = true, .landmarks = true};
 
   // The stages, in data-flow order; positions count the source as 0.
   SourceStageOptions source_options;
@@ -152,16 +171,34 @@ void VoSession::Impl::build(const StereoRig& rig) {
   result.frontend_camera_threads = frontendCameraThreads(options);
   frontend = std::make_unique<FrontendStage>(
       result.config.frontend, rig, FrontendCapacities{.max_points = options.max_points}, uses_depth ? &hints : nullptr,
-      !options.overlay_file.empty(), result.frontend_camera_threads);
+      !options.overlay_file.empty() || needs.left_traces, result.frontend_camera_threads);
   chain.push_back(frontend.get());
   const int frontend_position = static_cast<int>(chain.size());
   positions.frontend = frontend_position;
   int backend_position = -1;
   if (options.estimate) {
-    backend = std::make_unique<BackendStage>(result.config.backend, rig, uses_depth ? &hints : nullptr);
+    backend =
+        std::make_unique<BackendStage>(result.config.backend, rig, uses_depth ? &hints : nullptr, needs.landmarks);
     chain.push_back(backend.get());
     backend_position = static_cast<int>(chain.size());
     positions.backend = backend_position;
+  }
+
+  const int max_landmarks = backend && needs.landmarks ? backend->landmarkCapacity() : 0;
+  // Where the write stage will sit, for the sinks that read the stages' timing.
+  StagePositions sink_positions = positions;
+  sink_positions.write = static_cast<int>(chain.size()) + 1;
+  const Trajectory* ground_truth_poses = ground_truth ? &*ground_truth : nullptr;
+  // The recording first among the outputs: a file that cannot be created leaves no other behind.
+  if (!options.mcap.file.empty()) {
+    recording = std::make_unique<McapSink>(McapSinkOptions{.file = options.mcap.file,
+                                                           .width = info.width,
+                                                           .height = info.height,
+                                                           .max_points = options.max_points,
+                                                           .max_landmarks = max_landmarks,
+                                                           .stages = sink_positions,
+                                                           .ground_truth = ground_truth_poses,
+                                                           .image_rate_hz = options.mcap.image_rate_hz});
   }
 
   const auto expected = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
@@ -190,6 +227,20 @@ void VoSession::Impl::build(const StereoRig& rig) {
                                        tracker.stereoRoundTripDist2() < kHintedStereoRoundTripDist2);
     sinks.push_back(progress.get());
   }
+  if (view_server != nullptr) {
+    view = std::make_unique<ViewSink>(*view_server, ViewSinkOptions{.width = info.width,
+                                                                    .height = info.height,
+                                                                    .max_points = options.max_points,
+                                                                    .max_landmarks = max_landmarks,
+                                                                    .stages = sink_positions,
+                                                                    .ground_truth = ground_truth_poses});
+    view->start();
+    sinks.push_back(view.get());
+  }
+  if (recording) {
+    recording->start();
+    sinks.push_back(recording.get());
+  }
   if (options.ros2) {
     if (!options.estimate) throw InputError("ROS 2 odometry needs poses: a tracking-only run estimates none");
     ros2 = std::make_unique<Ros2Sink>(*options.ros2);
@@ -204,7 +255,7 @@ void VoSession::Impl::build(const StereoRig& rig) {
 
   PipelineOptions pipeline_options = options.pipeline_options;
   pipeline_options.live_policy = options.pipeline_options.live_policy || options.realtime || info.live;
-  pipeline_options.slot_shape = {info.width, info.height, options.max_points};
+  pipeline_options.slot_shape = {info.width, info.height, options.max_points, max_landmarks};
   pipeline_options.stop_requested = [this, requested = stopRequest(options)] {
     return stop.load(std::memory_order_relaxed) || requested();
   };
@@ -243,6 +294,15 @@ void VoSession::Impl::collect() {
   result.rows = statistics->rows();
   if (trajectory) result.trajectory = trajectory->trajectory();
   for (const std::string& warning : report.warnings) result.warnings.push_back(warning);
+  if (recording) {
+    recording->finish();  // done by the sink stage already, unless the run failed before it
+    if (!recording->failure().empty()) result.warnings.push_back(recording->failure());
+    if (recording->dropped() > 0 || recording->imagesSkipped() > 0) {
+      result.warnings.push_back(fmt::format(
+          "MCAP recording {}: the recorder fell behind: {} frames not recorded, {} recorded without their image",
+          options.mcap.file.string(), recording->dropped(), recording->imagesSkipped()));
+    }
+  }
   if (ros2) {
     ros2->finish();  // done by the sink stage already, unless the run failed before it
     result.ros2_summary = ros2->summary();

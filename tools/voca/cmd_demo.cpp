@@ -19,6 +19,7 @@
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 
 namespace {
@@ -33,6 +34,7 @@ struct DemoOptions {
   std::string bitrate = "500k";
   int threads = 2;
   bool reuse = false;
+  voca::cli::ViewCli view;
 };
 
 // Runs another registered subcommand (synth, encode, track) as if typed on the command line, so the
@@ -80,6 +82,13 @@ int runDemo(const DemoOptions& o) {
   if (o.seconds < 2.0 || o.seconds > 120.0) throw voca::InputError("--seconds: expected 2 to 120");
   if (o.threads < 1) throw voca::InputError(fmt::format("--threads {}: expected 1 or more", o.threads));
   voca::encode::parseBitrate(o.bitrate);
+  // One server for the whole demo, from its start: a viewer connects once and sees both runs.
+  const std::unique_ptr<voca::view::FoxgloveServer> view = voca::cli::startView(o.view);
+  // A recording per run (both runs share their frames' stamps); checked before anything is made.
+  const std::string voca_mode(voca::priorModeName(voca::PriorMode::kMvParallelOf));
+  const std::string baseline_mode(voca::priorModeName(voca::PriorMode::kNone));
+  const voca::pipeline::McapRunOptions baseline_mcap = voca::cli::mcapRunOptions(o.view, baseline_mode);
+  const voca::pipeline::McapRunOptions voca_mcap = voca::cli::mcapRunOptions(o.view, voca_mode);
   // Ctrl-C in any step ends the demo the clean way (the steps stop at a frame boundary).
   voca::platform::installStopHandlers();
   const auto start = std::chrono::steady_clock::now();
@@ -138,7 +147,6 @@ int runDemo(const DemoOptions& o) {
     voca::pipeline::VoRunResult result;
     fs::path trajectory;
   };
-  const std::string voca_mode(voca::priorModeName(voca::PriorMode::kMvParallelOf));
   std::vector<Variant> variants = {
       {voca::PriorMode::kNone, fmt::format("baseline ({})", voca::priorModeName(voca::PriorMode::kNone)), {}, {}},
       {voca::PriorMode::kMvParallelOf, fmt::format("VOCA ({})", voca_mode), {}, {}}};
@@ -149,11 +157,14 @@ int runDemo(const DemoOptions& o) {
     options.progress = false;
     v.trajectory = out / fmt::format("traj_{}.txt", voca::priorModeName(v.mode));
     options.trajectory_file = v.trajectory;
+    options.view.server = view.get();
+    options.mcap = v.mode == voca::PriorMode::kNone ? baseline_mcap : voca_mcap;
     v.result = voca::pipeline::runVisualOdometry(options);
     if (v.result.pipeline_report.error || v.result.stop_signal != 0) {
       voca::cli::PipelineCli defaults;
       return voca::cli::reportRunEnd(v.result, defaults, "demo");
     }
+    for (const std::string& warning : v.result.warnings) fmt::print(stderr, "warning: {}\n", warning);
   }
 
   const fs::path overlay = out / fmt::format("overlay_{}.mp4", voca_mode);
@@ -200,6 +211,10 @@ int runDemo(const DemoOptions& o) {
   for (const Variant& v : variants) fmt::print("  trajectory ({}): {}\n", v.label, v.trajectory.string());
   if (!variants[0].result.ground_truth.empty()) fmt::print("  ground truth: {}\n", variants[0].result.ground_truth);
   fmt::print("  overlay video (blue previous, yellow MV prior, green tracked): {}\n", overlay.string());
+  if (!voca_mcap.file.empty()) {
+    fmt::print("  recordings (open in Foxglove or Lichtblick): {}, {}\n", baseline_mcap.file.string(),
+               voca_mcap.file.string());
+  }
   fmt::print("  sequences: {} (raw), {} (video)\n", raw.string(), video.string());
   fmt::print("compare yourself: voca eval --gt {} --est {}\n", variants[0].result.ground_truth,
              variants[1].trajectory.string());
@@ -221,11 +236,15 @@ const bool registered = voca::cli::registerCommand({
       app.add_option("--bitrate", o->bitrate, "Encoding bitrate per camera")->capture_default_str();
       app.add_option("--threads", o->threads, "Rendering threads")->capture_default_str();
       app.add_flag("--reuse", o->reuse, "Reuse the sequences already rendered and encoded in --out");
+      voca::cli::addViewOptions(app, o->view);
       app.footer(
           "Steps: `voca synth` (ray-cast room, exact ground truth), `voca encode` (libx264, the paper's\n"
           "settings), then the full VO on the decoded video twice: `none` (Basalt's KLT from the previous\n"
           "position) and `mv_parallel_of` (VOCA: codec motion vectors and optical flow in parallel), and\n"
-          "`voca track --overlay` for a video of the tracks. ATE/RTE are computed as the paper does.");
+          "`voca track --overlay` for a video of the tracks. ATE/RTE are computed as the paper does.\n\n" +
+          voca::cli::viewHelpFooter() +
+          "\nThe demo keeps one server for both runs; the page starts its graphs over when the second begins.\n"
+          "--mcap rec.mcap records each run to a file of its own: rec_none.mcap and rec_mv_parallel_of.mcap.");
       return [o] { return runDemo(*o); };
     },
 });

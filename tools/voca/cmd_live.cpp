@@ -11,6 +11,7 @@
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
 #include "tools/voca/ros2_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 #include "voca_rt/run.h"
 
@@ -25,6 +26,7 @@ struct LiveOptions {
   bool track_only = false;
   voca::cli::PipelineCli pipeline;
   voca::cli::Ros2Cli ros2;
+  voca::cli::ViewCli view;
 };
 
 int runLive(const LiveOptions& o) {
@@ -39,6 +41,7 @@ int runLive(const LiveOptions& o) {
   options.trajectory_format = o.format;
   if (o.ros2.enabled && o.track_only) throw voca::InputError("--ros2 publishes poses; --track-only estimates none");
   voca::cli::applyRos2Options(o.ros2, options);
+  voca::cli::applyViewOptions(o.view, options);
   voca_rt::CameraInput cameras;
   cameras.devices = o.camera.devices;
   cameras.size = o.camera.size;
@@ -76,11 +79,13 @@ const bool registered = voca::cli::registerCommand({
       app.add_flag("--track-only", o->track_only, "Frontend only: track features, estimate no poses");
       voca::cli::addPipelineOptions(app, o->pipeline);
       voca::cli::addRos2Options(app, o->ros2);
+      voca::cli::addViewOptions(app, o->view);
       app.footer(voca::cli::cameraHelpFooter() + "\n\n" +
                  "Live input always runs with the live policy: when a stage falls behind, the oldest waiting frame\n"
                  "is dropped and counted (--profile lists drops per stage). Timestamps are the cameras' kernel\n"
                  "timestamps, so the trajectory lines up with other sensors on CLOCK_MONOTONIC.\n\n" +
-                 voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter());
+                 voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter() + "\n\n" +
+                 voca::cli::viewHelpFooter());
       return [o] { return runLive(*o); };
     },
 });

@@ -10,6 +10,7 @@
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
 #include "tools/voca/ros2_cli.h"
+#include "tools/voca/view_cli.h"
 #include "voca/core/error.h"
 #include "voca_rt/run.h"
 
@@ -25,6 +26,7 @@ struct RunOptions {
   double stream_timeout = 3.0, stream_wait = 30.0;
   voca::cli::PipelineCli pipeline;
   voca::cli::Ros2Cli ros2;
+  voca::cli::ViewCli view;
 };
 
 int runRun(const RunOptions& o) {
@@ -38,6 +40,7 @@ int runRun(const RunOptions& o) {
   options.trajectory_file = o.out;
   options.trajectory_format = o.format;
   voca::cli::applyRos2Options(o.ros2, options);
+  voca::cli::applyViewOptions(o.view, options);
   voca_rt::Input input;
   input.path = o.input;
   input.ground_truth = o.gt;
@@ -104,6 +107,7 @@ const bool registered = voca::cli::registerCommand({
           ->capture_default_str();
       voca::cli::addPipelineOptions(app, o->pipeline);
       voca::cli::addRos2Options(app, o->ros2);
+      voca::cli::addViewOptions(app, o->view);
       app.footer(
           "Each frame is tracked, then estimated, and its pose written as it was estimated then (causal; later\n"
           "window refinements never rewrite it). Poses are in the calibration's body frame (T_world_body =\n"
@@ -115,7 +119,8 @@ const bool registered = voca::cli::registerCommand({
           "on. Ctrl-C or --stream-timeout seconds of silence end the run cleanly. A stream recorded to a file\n"
           "(`voca stream seq out.ts`, or file:///path/out.ts) replays like a dataset: every frame, as fast as\n"
           "the pipeline goes (--realtime paces it at its stamps).\n\n" +
-          voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter());
+          voca::cli::pipelineHelpFooter() + "\n\n" + voca::cli::ros2HelpFooter() + "\n\n" +
+          voca::cli::viewHelpFooter());
       return [o] { return runRun(*o); };
     },
 });

@@ -325,6 +325,18 @@ void VoEstimator::frameStats(int frame, PoseEstimate& out) const {
   out.num_landmarks = landmarks_.size();
 }
 
+std::size_t VoEstimator::worldLandmarks(std::span<Eigen::Vector3f> out) const {
+  std::size_t n = 0;
+  for (const int index : landmarks_.alive()) {
+    if (n == out.size()) break;
+    const backend::Landmark& lm = landmarks_[index];
+    if (!(lm.rho > 0.0) || lm.host < 0) continue;
+    const SE3d& T_w_host = window_[lm.host].T_w_c;
+    out[n++] = (T_w_host * (stereographicUnproject(lm.s) / lm.rho)).cast<float>();
+  }
+  return n;
+}
+
 const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
   PoseEstimate& est = estimate_;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <span>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -86,6 +87,12 @@ class VoEstimator {
   const BackendConfig& config() const { return config_; }
   int numKeyframes() const { return window_.numKeyframes(); }
   int numLandmarks() const { return landmarks_.size(); }
+  // The most landmarks the window holds (BackendConfig::max_landmarks).
+  int landmarkCapacity() const { return landmarks_.capacity(); }
+  // The window's landmarks in the world frame (T_world_cam0 of their host times the point its bearing
+  // and inverse distance give), at most out.size() of them; returns how many were written. Read-only
+  // and allocation-free: for viewers, never used by the estimate.
+  std::size_t worldLandmarks(std::span<Eigen::Vector3f> out) const;
 
   // ---- inspection, for tests and diagnostics (these allocate) ----
   // (t_ns, T_world_cam0) of every frame in the window, oldest first.

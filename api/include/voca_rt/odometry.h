@@ -134,6 +134,15 @@ struct Options {
   // Each tracked pose published into a ROS 2 graph over DDS (Cyclone DDS; ROS itself not needed) as
   // odometry and on /tf, by a thread of its own that never holds the pipeline up. Needs estimate.
   std::optional<Ros2Output> ros2;
+  // Live view ("[host:]port", as `voca run --view`): a web page at http://host:port/ and the Foxglove
+  // WebSocket protocol at ws://host:port with the left camera and its tracks, the path, the landmarks and
+  // the latency per stage; bound before the input opens. A slow client misses messages, never slows the
+  // run. Empty: none.
+  std::string view_address;
+  double view_image_rate_hz = 10.0;  // camera images per second at most, for the view and the recording
+  // The view's channels recorded to this MCAP file as the run goes (Foxglove, Lichtblick); a write error
+  // stops the recording with a warning, not the run. Empty: none.
+  std::string mcap_file;
 
   // Polled between frames: true stops the run as Ctrl-C stops the command line (what was estimated
   // is kept). Empty: only finish() or the destructor stop it.
