@@ -76,8 +76,18 @@ struct Pipeline::Impl final : StageContext {
   struct StageEmitter final : Emitter {
     Impl* impl = nullptr;
     int stage = 0;
-    void forward(FrameSlot& slot) override { impl->afterStage(stage, slot); }
-    void release(FrameSlot& slot, ReleaseReason reason) override { impl->release(stage, slot, reason); }
+    // The slot the stage is processing, and whether it already handed it on: once handed on, another
+    // thread owns it and this one must not read it again (not even to name its frame in an error).
+    const FrameSlot* current = nullptr;
+    bool current_handed_on = false;
+    void forward(FrameSlot& slot) override {
+      if (&slot == current) current_handed_on = true;
+      impl->afterStage(stage, slot);
+    }
+    void release(FrameSlot& slot, ReleaseReason reason) override {
+      if (&slot == current) current_handed_on = true;
+      impl->release(stage, slot, reason);
+    }
   };
 
   SourceStage& source;
@@ -118,9 +128,10 @@ struct Pipeline::Impl final : StageContext {
     return it == names.end() ? -1 : helper_cores[static_cast<std::size_t>(it - names.begin())];
   }
 
-  void fail(int stage, const FrameSlot* slot, const std::string& message) {
+  // frame_index: the frame the stage failed on, -1 for none.
+  void fail(int stage, std::int64_t frame_index, const std::string& message) {
     if (!error_claimed.exchange(true)) {
-      error = StageError{names[static_cast<std::size_t>(stage)], slot ? slot->frameIndex() : -1, message};
+      error = StageError{names[static_cast<std::size_t>(stage)], frame_index, message};
     }
     int current = failed_stage.load();
     while (current < stage && !failed_stage.compare_exchange_weak(current, stage)) {
@@ -187,12 +198,17 @@ struct Pipeline::Impl final : StageContext {
       slot.dropped_so_far = dropped_total.load(std::memory_order_relaxed);
       slot.damaged_so_far = damaged_total.load(std::memory_order_relaxed);
     }
+    StageEmitter& emitter = emitters[static_cast<std::size_t>(stage)];
+    const std::int64_t frame_index = slot.frameIndex();
+    emitter.current = &slot;
+    emitter.current_handed_on = false;
     try {
-      stages[static_cast<std::size_t>(stage - 1)]->process(slot, emitters[static_cast<std::size_t>(stage)]);
+      stages[static_cast<std::size_t>(stage - 1)]->process(slot, emitter);
     } catch (const std::exception& e) {
-      fail(stage, &slot, e.what());
-      if (slot.owner_stage == stage) release(stage, slot, ReleaseReason::kAborted);
+      fail(stage, frame_index, e.what());
+      if (!emitter.current_handed_on) release(stage, slot, ReleaseReason::kAborted);
     }
+    emitter.current = nullptr;
   }
 
   // A stage forwarded the slot: stamp its end and hand the slot on.
@@ -247,7 +263,7 @@ struct Pipeline::Impl final : StageContext {
       try {
         stages[static_cast<std::size_t>(k - 1)]->finish(emitters[static_cast<std::size_t>(k)]);
       } catch (const std::exception& e) {
-        fail(k, nullptr, e.what());
+        fail(k, -1, e.what());
       }
     }
     const std::size_t index = static_cast<std::size_t>(&group - groups.data());
@@ -279,7 +295,7 @@ struct Pipeline::Impl final : StageContext {
           }
         }
       } catch (const std::exception& e) {
-        fail(k, nullptr, e.what());
+        fail(k, -1, e.what());
       }
     }
   }
@@ -308,7 +324,7 @@ struct Pipeline::Impl final : StageContext {
       try {
         produced = source.produce(*slot);
       } catch (const std::exception& e) {
-        fail(0, nullptr, e.what());
+        fail(0, -1, e.what());
       }
       if (produced == Produced::kEnd) {
         releaseToFree(0, *slot);

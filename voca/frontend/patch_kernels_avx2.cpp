@@ -4,6 +4,7 @@
 #include <immintrin.h>
 
 #include <cstdint>
+#include <cstring>
 
 #include "voca/frontend/patch_kernels.h"
 #endif
@@ -27,7 +28,13 @@ namespace {
 [[gnu::target("avx2"), gnu::always_inline]] inline void gatherPairs8(const float* const p[8], __m256& first,
                                                                      __m256& second) {
   __m128 pair[8];
-  for (int k = 0; k < 8; ++k) pair[k] = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p[k])));
+  for (int k = 0; k < 8; ++k) {
+    // Two floats as one 64-bit load; memcpy, not a double* cast, which would break aliasing rules
+    // (and the compiler's assumptions with them).
+    double two_floats;
+    std::memcpy(&two_floats, p[k], sizeof two_floats);
+    pair[k] = _mm_castpd_ps(_mm_set_sd(two_floats));
+  }
   // Lanes 0-3 of the result come from points 0-3, lanes 4-7 from points 4-7.
   const __m256 points01 = _mm256_set_m128(_mm_movelh_ps(pair[4], pair[5]), _mm_movelh_ps(pair[0], pair[1]));
   const __m256 points23 = _mm256_set_m128(_mm_movelh_ps(pair[6], pair[7]), _mm_movelh_ps(pair[2], pair[3]));
