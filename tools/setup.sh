@@ -18,6 +18,8 @@ packages=(
   libpng-dev                                     # PNG datasets
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
+  pybind11-dev python3-pybind11 python3-dev      # the Python module voca (api/python)
+  python3-numpy python3-pytest python3-pil       # ... its arrays, and its tests (pytest, PNG frames)
 )
 
 missing=()
