@@ -226,7 +226,9 @@ GrayArray grayImage(const py::array& image, const char* name) {
     raiseInputError(std::string(name) + ": expected a gray image of shape (height, width), got " +
                     std::to_string(image.ndim()) + " dimensions");
   }
-  return GrayArray::ensure(image);
+  GrayArray pixels = GrayArray::ensure(image);
+  if (!pixels) throw py::error_already_set();
+  return pixels;
 }
 
 bool finalizing() { return _Py_IsFinalizing() != 0; }
@@ -687,11 +689,11 @@ poses estimated before can still be polled.)doc")
   m.def(
       "run",
       [](const std::filesystem::path& path, const OptionalPath& calib, const std::optional<std::string>& mode,
-         const std::optional<std::string>& config, const std::optional<bool>& bridge_iframes,
-         const std::optional<std::string>& encode, int max_frames, int first_frame, const OptionalPath& gt,
-         int max_points, int threads, int frontend_threads, const std::string& pins, const std::string& scheduling,
-         int priority, bool lock_memory, bool strict, const std::string& decoder, bool skip_deblock, bool realtime,
-         double speed, double stream_wait_s, double stream_timeout_s, const OptionalPath& trajectory_file,
+         const std::optional<std::string>& config, const std::optional<std::string>& encode, int max_frames,
+         int first_frame, int threads, const std::optional<bool>& bridge_iframes, const OptionalPath& gt,
+         int max_points, int frontend_threads, const std::string& pins, const std::string& scheduling, int priority,
+         bool lock_memory, bool strict, const std::string& decoder, bool skip_deblock, bool realtime, double speed,
+         double stream_wait_s, double stream_timeout_s, const OptionalPath& trajectory_file,
          const std::string& trajectory_format, const OptionalPath& statistics_file, const OptionalPath& trace_file,
          bool progress, bool return_summary) {
         CommonOptions common;
@@ -717,11 +719,11 @@ poses estimated before can still be polled.)doc")
         return runPath(path, common, gt, encode, max_frames, first_frame, realtime, speed, stream_wait_s,
                        stream_timeout_s, return_summary);
       },
-      py::arg("path"), py::arg("calib") = py::none(), py::kw_only(), py::arg("mode") = py::none(),
-      py::arg("config") = py::none(), py::arg("bridge_iframes") = py::none(), py::arg("encode") = py::none(),
-      py::arg("max_frames") = 0, py::arg("first_frame") = 0, py::arg("gt") = py::none(), py::arg("max_points") = 1000,
-      py::arg("threads") = 0, py::arg("frontend_threads") = 0, py::arg("pins") = "", py::arg("scheduling") = "other",
-      py::arg("priority") = 50, py::arg("lock_memory") = false, py::arg("strict") = false, py::arg("decoder") = "auto",
+      py::arg("path"), py::arg("calib") = py::none(), py::arg("mode") = py::none(), py::arg("config") = py::none(),
+      py::arg("encode") = py::none(), py::arg("max_frames") = 0, py::arg("first_frame") = 0, py::arg("threads") = 0,
+      py::kw_only(), py::arg("bridge_iframes") = py::none(), py::arg("gt") = py::none(), py::arg("max_points") = 1000,
+      py::arg("frontend_threads") = 0, py::arg("pins") = "", py::arg("scheduling") = "other", py::arg("priority") = 50,
+      py::arg("lock_memory") = false, py::arg("strict") = false, py::arg("decoder") = "auto",
       py::arg("skip_deblock") = false, py::arg("realtime") = false, py::arg("speed") = 1.0,
       py::arg("stream_wait_s") = 30.0, py::arg("stream_timeout_s") = 3.0, py::arg("trajectory_file") = py::none(),
       py::arg("trajectory_format") = "tum", py::arg("statistics_file") = py::none(), py::arg("trace_file") = py::none(),

@@ -337,3 +337,27 @@ def test_ctrl_c_stops_a_run_cleanly():
         voca.run(EUROC, CALIB, realtime=True)
     timer.join()
     assert time.monotonic() - started < 2.0
+
+
+def test_a_run_without_any_pose_raises_with_what_was_estimated(tmp_path):
+    # Black frames: every frame is lost, which `voca run` reports as an error (exit 1) after writing
+    # the repeated poses; voca.run raises with the same message and hands those rows over.
+    from PIL import Image
+
+    black = tmp_path / "black" / "mav0"
+    for camera in ("cam0", "cam1"):
+        (black / camera / "data").mkdir(parents=True)
+        rows = ["#timestamp [ns],filename"]
+        for i in range(6):
+            t_ns = 1_000_000_000 + i * 50_000_000
+            Image.fromarray(np.zeros((480, 752), np.uint8)).save(black / camera / "data" / f"{t_ns}.png")
+            rows.append(f"{t_ns},{t_ns}.png")
+        (black / camera / "data.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "black.tum"
+    expected = cli_error("run", black, "--calib", CALIB, "--out", out)
+    assert expected.startswith("no pose was estimated")
+    with pytest.raises(voca.Error) as raised:
+        voca.run(black, CALIB)
+    assert str(raised.value) == expected
+    assert raised.value.summary["lost"] == 6
+    assert_same_rows(raised.value.poses, read_tum(out))
