@@ -153,7 +153,8 @@ py::dict summaryDict(const voca_rt::Summary& s) {
 // The options both voca.Odometry and voca.run take, as the command line's.
 struct CommonOptions {
   OptionalPath calibration;
-  std::optional<std::string> config, mode;
+  OptionalPath config;  // a shipped config's name or a JSON file
+  std::optional<std::string> mode;
   std::optional<bool> bridge_iframes;
   int max_points = 1000;
   int threads = 0, frontend_threads = 0;
@@ -170,7 +171,7 @@ struct CommonOptions {
   voca_rt::Options options() const {
     voca_rt::Options o;
     o.calibration_file = pathText(calibration);
-    o.config = config.value_or("");
+    o.config = pathText(config);
     o.mode = mode.value_or("");
     o.bridge_iframes = bridge_iframes;
     o.max_points = max_points;
@@ -586,13 +587,12 @@ Keyword arguments (the command line's options of the same names):
   progress          progress lines on stderr
 
 Raises voca.Error for a calibration, config or option that cannot be used.)doc")
-      .def(py::init([](const OptionalPath& calibration, const std::string& input,
-                       const std::optional<std::string>& config, const std::optional<std::string>& mode,
-                       const std::optional<bool>& bridge_iframes, int max_points, bool live,
-                       const std::optional<std::string>& encode_bitrate, const std::string& encoder,
-                       double frame_rate_hz, int threads, int frontend_threads, const std::string& pins,
-                       const std::string& scheduling, int priority, bool lock_memory, bool strict,
-                       const std::string& decoder, bool skip_deblock, std::size_t poll_capacity,
+      .def(py::init([](const OptionalPath& calibration, const std::string& input, const OptionalPath& config,
+                       const std::optional<std::string>& mode, const std::optional<bool>& bridge_iframes,
+                       int max_points, bool live, const std::optional<std::string>& encode_bitrate,
+                       const std::string& encoder, double frame_rate_hz, int threads, int frontend_threads,
+                       const std::string& pins, const std::string& scheduling, int priority, bool lock_memory,
+                       bool strict, const std::string& decoder, bool skip_deblock, std::size_t poll_capacity,
                        const OptionalPath& trajectory_file, const std::string& trajectory_format,
                        const OptionalPath& statistics_file, const OptionalPath& trace_file, bool progress) {
              CommonOptions common;
@@ -689,13 +689,12 @@ poses estimated before can still be polled.)doc")
   m.def(
       "run",
       [](const std::filesystem::path& path, const OptionalPath& calib, const std::optional<std::string>& mode,
-         const std::optional<std::string>& config, const std::optional<std::string>& encode, int max_frames,
-         int first_frame, int threads, const std::optional<bool>& bridge_iframes, const OptionalPath& gt,
-         int max_points, int frontend_threads, const std::string& pins, const std::string& scheduling, int priority,
-         bool lock_memory, bool strict, const std::string& decoder, bool skip_deblock, bool realtime, double speed,
-         double stream_wait_s, double stream_timeout_s, const OptionalPath& trajectory_file,
-         const std::string& trajectory_format, const OptionalPath& statistics_file, const OptionalPath& trace_file,
-         bool progress, bool return_summary) {
+         const OptionalPath& config, const std::optional<std::string>& encode, int max_frames, int first_frame,
+         int threads, const std::optional<bool>& bridge_iframes, const OptionalPath& gt, int max_points,
+         int frontend_threads, const std::string& pins, const std::string& scheduling, int priority, bool lock_memory,
+         bool strict, const std::string& decoder, bool skip_deblock, bool realtime, double speed, double stream_wait_s,
+         double stream_timeout_s, const OptionalPath& trajectory_file, const std::string& trajectory_format,
+         const OptionalPath& statistics_file, const OptionalPath& trace_file, bool progress, bool return_summary) {
         CommonOptions common;
         common.calibration = calib;
         common.config = config;
