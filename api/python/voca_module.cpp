@@ -237,14 +237,14 @@ bool finalizing() { return _Py_IsFinalizing() != 0; }
 // voca.Odometry: one voca_rt::Odometry, its pipeline running on threads of its own.
 class PyOdometry {
  public:
-  PyOdometry(const voca_rt::Options& options) {
+  explicit PyOdometry(const voca_rt::Options& options) {
     py::gil_scoped_release release;
     odometry_ = std::make_unique<voca_rt::Odometry>(options);
   }
 
   ~PyOdometry() {
-    // The flush waits for the pipeline; other Python threads go on meanwhile (never Python's own
-    // shutdown, which must keep the GIL).
+    // Flushing waits for the pipeline, without the GIL so that other Python threads go on; not while
+    // the interpreter shuts down, whose thread must keep it.
     if (finalizing() || PyGILState_Check() == 0) {
       odometry_.reset();
       return;
