@@ -8,13 +8,14 @@ tree=$(mktemp -d)
 trap 'rm -rf "$tree"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-mkdir -p "$tree"/{voca/frontend,formats/calib,drivers/decode,pipeline/vo,platform/realtime,tools/voca}
+mkdir -p "$tree"/{voca/frontend,formats/calib,drivers/decode,pipeline/vo,platform/realtime,tools/voca,api/python}
 printf '#include "voca/core/image.h"\n#include <vector>\n' >"$tree/voca/frontend/ok.cpp"
 printf '#include "voca/calib/calibration.h"\n#include <nlohmann/json.hpp>\n' >"$tree/formats/calib/ok.cpp"
 printf '#include "voca/core/image.h"\n#include "formats/calib/ok.h"\n#include "platform/realtime/clock.h"\n' \
   >"$tree/drivers/decode/ok.cpp"
 printf '#include "drivers/decode/ok.h"\n#include "voca/frontend/ok.h"\n' >"$tree/pipeline/vo/ok.cpp"
 printf '#include "pipeline/vo/ok.h"\n' >"$tree/tools/voca/ok.cpp"
+printf '#include "voca_rt/odometry.h"\n#include <pybind11/pybind11.h>\n' >"$tree/api/python/ok.cpp"
 bash "$check" "$tree" >/dev/null || fail "a clean tree was rejected"
 
 expect_violation() {  # <file> <include line> <rule text>
@@ -37,9 +38,11 @@ expect_violation drivers/decode/bad.cpp '#include "pipeline/vo/vo_runner.h"' "dr
 expect_violation drivers/decode/bad.cpp '#include "tools/voca/command.h"' "drivers/ must not include"
 expect_violation pipeline/vo/bad.cpp '#include "tools/voca/pipeline_cli.h"' "pipeline/ must not include"
 expect_violation platform/realtime/bad.cpp '#include "drivers/decode/video_decoder.h"' "platform/ must not include"
+expect_violation api/python/bad.cpp '#include "api/src/api_internal.h"' "api/python/ must not include"
+expect_violation api/python/bad.cpp '#include "pipeline/vo/vo_session.h"' "api/python/ must not include"
 bash "$check" "$tree" >/dev/null || fail "the tree is not clean again after the bad files were removed"
 
 rc=0
 bash "$check" "$tree/nonexistent" >/dev/null 2>&1 || rc=$?
 [[ $rc -eq 2 ]] || fail "a missing root gave exit $rc, expected 2"
-echo "check_layers.sh: clean tree passes, 12 kinds of cross-layer include fail"
+echo "check_layers.sh: clean tree passes, 14 kinds of cross-layer include fail"

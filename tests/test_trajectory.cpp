@@ -8,6 +8,7 @@
 #include <random>
 
 #include "formats/trajectory/trajectory_io.h"
+#include "formats/trajectory/trajectory_writer.h"
 #include "tests/test_support.h"
 
 using voca::SE3d;
@@ -72,6 +73,25 @@ TEST_CASE("TUM and EuRoC round trips keep timestamps exactly and poses to the la
           original.poses[i].T_world_body.unitQuaternion().coeffs(), 1e-15));
     }
   }
+}
+
+TEST_CASE("formatTumRow of a pose's numbers is the writer's row, which rebuilding the SE3 would change") {
+  // voca_rt::tumRow has only the numbers of a pose; the row must still be the trajectory file's. An SE3
+  // made from them again normalises the unit quaternion once more, which moves its last bit for some
+  // poses: this seed has such poses, so the check below would catch a rebuilt SE3.
+  const Trajectory trajectory = randomTrajectory(200, 11);
+  int renormalised_differently = 0;
+  for (const TimedPose& pose : trajectory.poses) {
+    const Eigen::Vector3d p = pose.T_world_body.translation();
+    const Eigen::Quaterniond q = pose.T_world_body.unitQuaternion();
+    fmt::memory_buffer from_numbers, from_pose, from_rebuilt;
+    voca::formatTumRow(pose.t_ns, p, q, from_numbers);
+    voca::formatTrajectoryRow(pose, TrajectoryFormat::kTum, from_pose);
+    CHECK(fmt::to_string(from_numbers) == fmt::to_string(from_pose));
+    voca::formatTrajectoryRow({pose.t_ns, SE3d(q, p)}, TrajectoryFormat::kTum, from_rebuilt);
+    if (fmt::to_string(from_rebuilt) != fmt::to_string(from_pose)) ++renormalised_differently;
+  }
+  CHECK(renormalised_differently > 0);
 }
 
 TEST_CASE("KITTI round trip, with and without a times file") {

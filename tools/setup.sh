@@ -22,6 +22,8 @@ packages=(
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
   python3-websockets python3-jsonschema python3-pil chromium  # live view tests: protocol client, schemas, the page in headless chromium
   python3                                        # the MCAP reader test (tests/mcap_reader.py: standard library only)
+  pybind11-dev python3-pybind11 python3-dev      # the Python module voca (api/python)
+  python3-numpy python3-pytest                 # ... its arrays, and its tests (pytest, PNG frames)
 )
 
 missing=()

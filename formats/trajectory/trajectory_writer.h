@@ -15,6 +15,11 @@ namespace voca {
 // Appends one row of the format to `row` (a pose's line of the file, with its '\n'): what the
 // writer writes, for programs that print rows themselves.
 void formatTrajectoryRow(const TimedPose& pose, TrajectoryFormat format, fmt::memory_buffer& row);
+// The TUM row of a pose given by its numbers: formatTrajectoryRow's kTum row for the pose whose
+// translation and unit quaternion these are. Made from an SE3 again, the quaternion would be
+// normalised once more and could change in its last bit.
+void formatTumRow(std::int64_t t_ns, const Eigen::Vector3d& position, const Eigen::Quaterniond& rotation,
+                  fmt::memory_buffer& row);
 
 class TrajectoryWriter {
  public:
