@@ -28,21 +28,26 @@ TrajectoryWriter::~TrajectoryWriter() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
+void formatTumRow(std::int64_t t_ns, const Eigen::Vector3d& p_world_body, const Eigen::Quaterniond& q_world_body,
+                  fmt::memory_buffer& row) {
+  // Seconds with exactly 9 decimals, so the nanosecond timestamp reads back unchanged; fmt's "{}"
+  // is the shortest text that reads back to the same double.
+  const bool negative = t_ns < 0;
+  const std::uint64_t magnitude =
+      negative ? std::uint64_t{0} - static_cast<std::uint64_t>(t_ns) : static_cast<std::uint64_t>(t_ns);
+  fmt::format_to(std::back_inserter(row), "{}{}.{:09d} {} {} {} {} {} {} {}\n", negative ? "-" : "",
+                 magnitude / 1'000'000'000u, magnitude % 1'000'000'000u, p_world_body.x(), p_world_body.y(),
+                 p_world_body.z(), q_world_body.x(), q_world_body.y(), q_world_body.z(), q_world_body.w());
+}
+
 void formatTrajectoryRow(const TimedPose& pose, TrajectoryFormat format, fmt::memory_buffer& row) {
   const Eigen::Vector3d& p = pose.T_world_body.translation();
   const Eigen::Quaterniond& q = pose.T_world_body.unitQuaternion();
   auto out = std::back_inserter(row);
   switch (format) {
-    case TrajectoryFormat::kTum: {
-      // Seconds with exactly 9 decimals, so the nanosecond timestamp reads back unchanged; fmt's "{}"
-      // is the shortest text that reads back to the same double.
-      const bool negative = pose.t_ns < 0;
-      const std::uint64_t magnitude =
-          negative ? std::uint64_t{0} - static_cast<std::uint64_t>(pose.t_ns) : static_cast<std::uint64_t>(pose.t_ns);
-      fmt::format_to(out, "{}{}.{:09d} {} {} {} {} {} {} {}\n", negative ? "-" : "", magnitude / 1'000'000'000u,
-                     magnitude % 1'000'000'000u, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+    case TrajectoryFormat::kTum:
+      formatTumRow(pose.t_ns, p, q, row);
       break;
-    }
     case TrajectoryFormat::kEuroc:
       fmt::format_to(out, "{},{},{},{},{},{},{},{}\n", pose.t_ns, p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
       break;

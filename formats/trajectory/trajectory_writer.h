@@ -15,6 +15,10 @@ namespace voca {
 // Appends one row of the format to `row` (a pose's line of the file, with its '\n'): what the
 // writer writes, for programs that print rows themselves.
 void formatTrajectoryRow(const TimedPose& pose, TrajectoryFormat format, fmt::memory_buffer& row);
+// The TUM row of a pose given by its parts, written as they are: rebuilding an SE3 first would
+// renormalise the quaternion and change its last digits against the writer's rows.
+void formatTumRow(std::int64_t t_ns, const Eigen::Vector3d& p_world_body, const Eigen::Quaterniond& q_world_body,
+                  fmt::memory_buffer& row);
 
 class TrajectoryWriter {
  public:
