@@ -11,6 +11,8 @@
 #   api/      -> tools/   (the library API, above the pipeline; the command line is its user)
 #   api/include/ -> voca/ formats/ drivers/ pipeline/ platform/ api/ tools/   (public headers: only
 #                                                              voca_rt/ and the standard library)
+#   examples/ -> voca/ formats/ drivers/ pipeline/ platform/ api/ tools/   (programs a user copies:
+#                                                   they build against the installed headers alone)
 # Prints every violation as file:line and exits 1 if there is any; 2 on a usage error.
 #
 #   tools/check_layers.sh [source root]     (default: the repository this script is in)
@@ -29,7 +31,8 @@ rules=("voca:formats drivers pipeline api tools platform"
        "pipeline:api tools"
        "platform:drivers pipeline api tools"
        "api:tools"
-       "api/include:voca formats drivers pipeline platform api tools")
+       "api/include:voca formats drivers pipeline platform api tools"
+       "examples:voca formats drivers pipeline platform api tools")
 
 violations=0
 checked=0
