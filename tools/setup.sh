@@ -18,6 +18,7 @@ packages=(
   libpng-dev                                     # PNG datasets
   clang-14 libclang-rt-14-dev                    # libFuzzer + sanitizers for tests/fuzz (tools/fuzz.sh)
   python3-matplotlib                             # plots of evaluation suites (tools/plot_suite.py)
+  dpkg-dev file                                  # Debian packages with cpack: dpkg-shlibdeps, ELF detection
 )
 
 missing=()
