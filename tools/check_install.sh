@@ -10,7 +10,7 @@
 #   bash tools/check_install.sh aarch64     after building voca and voca_rt in build/aarch64 (and
 #       build/release's voca for the reference): builds the arm64 .deb, unpacks it into a folder,
 #       cross-builds the example against it, runs it under qemu-user on the KITTI 06 clip and
-#       compares its rows with the amd64 command line's.
+#       compares its rows with the amd64 command line's (within 1e-6: see compare_rows_within).
 #
 # Needs ../shared/data beside the checkout. Leaves the .deb in build/<preset>/.
 set -euo pipefail
@@ -34,17 +34,40 @@ version=$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "build/$preset/CMakeCache
 libdir=$(sed -n 's/^CMAKE_INSTALL_LIBDIR:PATH=//p' "build/$preset/CMakeCache.txt")
 major=${version%%.*}
 
-# The example's rows (stdin of the comparison: file $1) against the trajectory `voca run` wrote ($2).
+# The example's rows (file $1) against the trajectory `voca run` wrote ($2), byte for byte.
 compare_rows() {
   local rows
   grep -v '^#' "$2" >"$work/cli_rows.tum"
   rows=$(wc -l <"$work/cli_rows.tum")
   [ "$rows" -ge 20 ] || fail "voca run wrote only $rows poses into $2"
   if ! cmp -s "$work/cli_rows.tum" "$1"; then
-    diff "$work/cli_rows.tum" "$1" | head -10 >&2
+    { diff "$work/cli_rows.tum" "$1" || true; } | head -10 >&2
     fail "the example's rows ($1) differ from voca run --out ($2)"
   fi
   echo "check_install: example: $rows rows identical to voca run --out"
+}
+
+# The same across architectures: the same frames and times, and every position and quaternion
+# component within $3 of the other's. Bit-identical results need the same libm and the same
+# instruction choices, which x86-64 and AArch64 builds do not share (on the KITTI 06 clip the
+# arm64 poses differ by at most 2e-11 m and 3e-14 in the quaternion, from the second frame on).
+compare_rows_within() {
+  local rows tolerance=$3 report
+  grep -v '^#' "$2" >"$work/cli_rows.tum"
+  rows=$(wc -l <"$work/cli_rows.tum")
+  [ "$rows" -ge 20 ] || fail "voca run wrote only $rows poses into $2"
+  [ "$(wc -l <"$1")" -eq "$rows" ] || fail "the example wrote $(wc -l <"$1") rows, voca run --out $rows"
+  report=$(paste -d ' ' "$work/cli_rows.tum" "$1" | awk -v tolerance="$tolerance" '
+    NF != 16 || $1 != $9 { printf "row %d: frames differ: %s | %s\n", NR, $1, $9; bad = 1; exit }
+    { for (i = 2; i <= 8; ++i) { d = $i - $(i + 8); if (d < 0) d = -d; if (d > worst) worst = d
+        if (d > tolerance) { printf "row %d column %d: %s against %s\n", NR, i, $i, $(i + 8); bad = 1; exit } } }
+    END { if (!bad) printf "%.3g", worst; exit bad }') ||
+    fail "the example's rows ($1) differ from voca run --out ($2) by more than $tolerance: $report"
+  if cmp -s "$work/cli_rows.tum" "$1"; then
+    echo "check_install: example: $rows rows identical to voca run --out"
+  else
+    echo "check_install: example: $rows rows within $tolerance of voca run --out (largest difference $report)"
+  fi
 }
 
 # Configures and builds examples/odometry against VocaRT found under $1 and nowhere else (no package
@@ -162,4 +185,6 @@ quiet "$host_voca" encode "$data/kitti06_first51/sequences/06" --out "$work/vide
 quiet "$host_voca" run "$work/video" --config kitti --out "$work/cli.tum"
 "${emulator[@]}" "$work/example/voca_example_odometry" "$work/video" "$work/video/calib.json" kitti \
   >"$work/example.tum"
-compare_rows "$work/example.tum" "$work/cli.tum"
+# 1e-6 (a micrometre, a millionth of a quaternion component): far above what the architectures'
+# rounding accumulates over the clip, far below any error of the odometry (ATE 0.13 m here).
+compare_rows_within "$work/example.tum" "$work/cli.tum" 1e-6
