@@ -13,6 +13,8 @@
 #                                                              voca_rt/ and the standard library)
 #   api/python/  -> voca/ formats/ drivers/ pipeline/ platform/ api/ tools/   (the Python module is a
 #                                                              user of the public headers only)
+#   examples/ -> voca/ formats/ drivers/ pipeline/ platform/ api/ tools/   (programs a user copies:
+#                                                   they build against the installed headers alone)
 # Prints every violation as file:line and exits 1 if there is any; 2 on a usage error.
 #
 #   tools/check_layers.sh [source root]     (default: the repository this script is in)
@@ -33,6 +35,7 @@ rules=("voca:formats drivers pipeline api tools platform"
        "api:tools"
        "api/include:voca formats drivers pipeline platform api tools"
        "api/python:voca formats drivers pipeline platform api tools")
+       "examples:voca formats drivers pipeline platform api tools")
 
 violations=0
 checked=0

@@ -24,6 +24,7 @@ packages=(
   python3                                        # the MCAP reader test (tests/mcap_reader.py: standard library only)
   pybind11-dev python3-pybind11 python3-dev      # the Python module voca (api/python)
   python3-numpy python3-pytest                 # ... its arrays, and its tests (pytest, PNG frames)
+  dpkg-dev file                                  # Debian packages with cpack: dpkg-shlibdeps, ELF detection
 )
 
 missing=()

@@ -5,6 +5,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
 cmake --workflow --preset test
+# Install stage: the installed tree (only the expected files), the CMake package and pkg-config file
+# used by programs built against it alone, the example's poses against the command line's, and the
+# amd64 Debian package (tools/check_install.sh).
+install_start=$SECONDS
+bash tools/check_install.sh release
+echo "install: installed tree, consumers and amd64 package checked in $((SECONDS - install_start)) s"
 # The asan-labelled tests, as CTest lists them (test names are their target names); only those
 # are built with the sanitizers.
 cmake --preset asan >/dev/null
@@ -26,13 +32,17 @@ fi
 
 # Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot
 # rot unnoticed. Runs in CI (CI=true) or with VOCA_CROSS=1; VOCA_CROSS=0 skips it. Builds only the
-# voca tool and the unit-test executables (test names are their target names), not the e2e tests.
+# voca tool, the library and the unit-test executables (test names are their target names), not the
+# e2e tests; then packages the arm64 .deb and runs the example built against it under qemu.
 if [ "${VOCA_CROSS:-$([ "${CI:-}" = true ] && echo 1 || echo 0)}" = 1 ]; then
   cross_start=$SECONDS
   bash tools/cross-setup.sh aarch64
   cmake --preset aarch64
   cross_targets=$(ctest --preset aarch64 -N | sed -n 's/^ *Test *#[0-9]*: *//p')
-  cmake --build --preset aarch64 --target voca ${cross_targets}
+  cmake --build --preset aarch64 --target voca voca_rt ${cross_targets}
   ctest --preset aarch64
   echo "cross: aarch64 setup, build and emulated unit tests took $((SECONDS - cross_start)) s"
+  cross_package_start=$SECONDS
+  bash tools/check_install.sh aarch64
+  echo "cross: arm64 package and the example built against it checked in $((SECONDS - cross_package_start)) s"
 fi

@@ -34,7 +34,8 @@ std::array<double, 16> Pose::matrix() const {
 }
 
 std::string tumRow(const Pose& pose) {
-  // The pose's own numbers, as the trajectory writer had them from the estimate.
+  // The parts as they are (no SE3 in between, which would renormalise the quaternion), so the row is
+  // byte for byte the one the trajectory writer wrote for the same estimate.
   const Eigen::Quaterniond q(pose.orientation[3], pose.orientation[0], pose.orientation[1], pose.orientation[2]);
   fmt::memory_buffer row;
   voca::formatTumRow(pose.t_ns, Eigen::Vector3d(pose.position[0], pose.position[1], pose.position[2]), q, row);
