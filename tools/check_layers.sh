@@ -34,7 +34,7 @@ rules=("voca:formats drivers pipeline api tools platform"
        "platform:drivers pipeline api tools"
        "api:tools"
        "api/include:voca formats drivers pipeline platform api tools"
-       "api/python:voca formats drivers pipeline platform api tools")
+       "api/python:voca formats drivers pipeline platform api tools"
        "examples:voca formats drivers pipeline platform api tools")
 
 violations=0
