@@ -19,3 +19,8 @@ add_test(NAME test_mcap_reader
                  --writer $<TARGET_FILE:mcap_sample_writer>)
 # Runs a host executable from Python: kept out of the emulated cross run.
 set_tests_properties(test_mcap_reader PROPERTIES LABELS "unit;noemu" TIMEOUT 300)
+# `voca run --mcap` end to end through the same reader: every pose recorded, SIGINT, /dev/full.
+add_test(NAME test_mcap_run
+         COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/test_mcap_run.py --voca $<TARGET_FILE:voca>
+                 --data ${PROJECT_SOURCE_DIR}/../shared/data)
+set_tests_properties(test_mcap_run PROPERTIES LABELS e2e SKIP_RETURN_CODE 77 TIMEOUT 300)
