@@ -1,19 +1,28 @@
 // The library API (voca_rt::Odometry) as a program uses it: pushed H.264 and gray frames, bad input
 // through it (another image size, time going back, a stream with B-frames, a calibration that does not
 // fit), the on-device encode path, one thread pushing while another polls, and stopping from the
-// destructor. (The CLI's rows against the API's: test_example_odometry and test_python.)
+// destructor, and that pushing and polling allocate nothing after the start (this executable counts
+// operator new: tests/test_alloc_counter.h). (The CLI's rows against the API's: test_example_odometry and test_python.)
 
 #include <doctest/doctest.h>
 
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "drivers/encode/video_encoder.h"
+// GCC sees the replaced operator delete free() what its inlined allocator got from operator new and
+// warns of a mismatch; the replacement operator new mallocs, so they match.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#include "tests/test_alloc_counter.h"
+#pragma GCC diagnostic pop
 #include "tests/test_support.h"
 #include "voca/core/image.h"
 #include "voca_rt/odometry.h"
@@ -277,4 +286,39 @@ TEST_CASE("the destructor stops: flushing writes every pushed frame, discarding 
     voca_rt::Odometry odometry(grayOptions(), {}, voca_rt::Odometry::Stop::kDiscard);
     for (int i = 0; i < 15; ++i) pushGray(odometry, i);
   }  // returning from here at all is the check: no frame left waiting holds the threads up
+}
+
+TEST_CASE("after start, pushing gray frames and polling their poses allocates nothing") {
+  constexpr int kWarmup = 15, kFrames = 45;
+  std::vector<voca::GrayImage> left, right;
+  for (int i = 0; i < kFrames; ++i) {
+    left.push_back(picture(i, 0));
+    right.push_back(picture(i, 8));
+  }
+  voca_rt::Odometry odometry(grayOptions());
+  voca_rt::Pose pose;
+  int polled = 0;
+  const auto pollUntil = [&](int count) {
+    while (polled < count) {
+      if (odometry.poll(pose)) {
+        ++polled;
+      } else {
+        std::this_thread::yield();
+      }
+    }
+  };
+  for (int i = 0; i < kWarmup; ++i) {
+    odometry.pushGray(i * kFrameNs, left[static_cast<std::size_t>(i)].data(), right[static_cast<std::size_t>(i)].data(),
+                      kWidth, kHeight);
+  }
+  pollUntil(kWarmup);
+  const long before = voca::test::g_allocations.load();
+  CHECK(before > 0);  // the counter is live: building the odometry allocated
+  for (int i = kWarmup; i < kFrames; ++i) {
+    odometry.pushGray(i * kFrameNs, left[static_cast<std::size_t>(i)].data(), right[static_cast<std::size_t>(i)].data(),
+                      kWidth, kHeight);
+  }
+  pollUntil(kFrames);
+  CHECK(voca::test::g_allocations.load() - before == 0);
+  CHECK(odometry.finish().frames == kFrames);
 }
