@@ -3,14 +3,31 @@
 # bad-input tests with AddressSanitizer and run those again, and fuzz every input parser briefly.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# Each stage's wall time, printed together at the end (and on failure, up to the failing stage).
+stage_times=()
+stage_start=$SECONDS
+stage_done() {
+  stage_times+=("$(printf '%-34s %5d s' "$1" $((SECONDS - stage_start)))")
+  stage_start=$SECONDS
+}
+print_stage_times() {
+  echo "stage times (total $SECONDS s):"
+  for line in "${stage_times[@]}"; do echo "  $line"; done
+}
+trap print_stage_times EXIT
+
 bash tools/setup.sh
+stage_done "setup (packages)"
 cmake --workflow --preset test
+stage_done "release build and every test"
 # Install stage: the installed tree (only the expected files), the CMake package and pkg-config file
 # used by programs built against it alone, the example's poses against the command line's, and the
 # amd64 Debian package (tools/check_install.sh).
 install_start=$SECONDS
 bash tools/check_install.sh release
 echo "install: installed tree, consumers and amd64 package checked in $((SECONDS - install_start)) s"
+stage_done "install, consumers, amd64 package"
 # The asan-labelled tests, as CTest lists them (test names are their target names); only those
 # are built with the sanitizers.
 cmake --preset asan >/dev/null
@@ -19,6 +36,7 @@ if [ -n "${asan_targets}" ]; then
   cmake --build --preset asan --target ${asan_targets}
   ctest --preset asan
 fi
+stage_done "asan build and tests"
 
 # Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
 # committed seed corpora (regression inputs included); any crash, leak or sanitizer report fails.
@@ -29,6 +47,7 @@ if [ "${fuzz_seconds}" != 0 ]; then
   bash tools/fuzz.sh "${fuzz_seconds}"
   echo "fuzz: build and runs took $((SECONDS - fuzz_start)) s"
 fi
+stage_done "fuzz"
 
 # Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot
 # rot unnoticed. Runs in CI (CI=true) or with VOCA_CROSS=1; VOCA_CROSS=0 skips it. Builds only the
@@ -42,7 +61,9 @@ if [ "${VOCA_CROSS:-$([ "${CI:-}" = true ] && echo 1 || echo 0)}" = 1 ]; then
   cmake --build --preset aarch64 --target voca voca_rt ${cross_targets}
   ctest --preset aarch64
   echo "cross: aarch64 setup, build and emulated unit tests took $((SECONDS - cross_start)) s"
+  stage_done "cross build and emulated tests"
   cross_package_start=$SECONDS
   bash tools/check_install.sh aarch64
   echo "cross: arm64 package and the example built against it checked in $((SECONDS - cross_package_start)) s"
+  stage_done "arm64 package and example"
 fi
