@@ -128,8 +128,7 @@ namespace {
 
 double stageMs(const pl::FrameSlot& slot, int position) {
   if (position < 0) return 0.0;
-  const pl::StageTiming& t = slot.timing[static_cast<std::size_t>(position)];
-  return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
+  return slot.timing[static_cast<std::size_t>(position)].serviceMs();
 }
 
 TrackingState state(voca::TrackingState state) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "platform/filesystem/output_paths.h"
+#include "platform/realtime/clock.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {
@@ -298,7 +299,7 @@ RunReport readTraceReport(const std::filesystem::path& path, bool* complete) {
 std::string formatLatencyReport(const RunReport& r) {
   std::string text;
   auto out = std::back_inserter(text);
-  const auto ms = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-6; };
+  constexpr auto ms = platform::nsToMs;
   fmt::format_to(out, "latency per stage over {} frames ({} thread{}), ms:\n", r.completed, r.threads,
                  r.threads == 1 ? "" : "s");
   fmt::format_to(out, "  {:<10} {:>7} {:>7} {:>7} {:>7}   {:>7} {:>7} {:>7}   {:>6} {:>5} {:>7} {:>7}\n", "stage",

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "drivers/source/stereo_source.h"
+#include "platform/realtime/clock.h"
 #include "voca/backend/estimator.h"
 #include "voca/core/stereo_frame.h"
 #include "voca/core/tracked_frame.h"
@@ -26,6 +27,7 @@ struct StageTiming {
   std::int64_t end_ns = 0;
   std::int64_t cpu_ns = 0;
   std::int64_t cpu_start_ns = 0;
+  double serviceMs() const { return platform::nsToMs(end_ns - start_ns); }
 };
 
 struct FrameSlot {

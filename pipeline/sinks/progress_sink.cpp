@@ -22,10 +22,7 @@ void ProgressSink::consume(const FrameSlot& slot) {
     hintAtStereoTolerance(slot);
   }
   if (frames_ % 20 != 0 && frames_ != total_) return;
-  const auto ms = [&](int stage) {
-    const StageTiming& t = slot.timing[static_cast<std::size_t>(stage)];
-    return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
-  };
+  const auto ms = [&](int stage) { return slot.timing[static_cast<std::size_t>(stage)].serviceMs(); };
   // "frame 12/300", or "frame 12" for live input of unknown length; formatted into the line's own
   // buffer, so an update allocates nothing.
   const double frontend_ms = ms(frontend_stage_), backend_ms = estimate_ ? ms(backend_stage_) : 0.0;

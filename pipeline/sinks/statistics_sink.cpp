@@ -40,8 +40,7 @@ namespace {
 
 float serviceMs(const FrameSlot& slot, int stage) {
   if (stage < 0) return 0.f;
-  const StageTiming& t = slot.timing[static_cast<std::size_t>(stage)];
-  return static_cast<float>(static_cast<double>(t.end_ns - t.start_ns) * 1e-6);
+  return static_cast<float>(slot.timing[static_cast<std::size_t>(stage)].serviceMs());
 }
 
 float cpuMs(const FrameSlot& slot, int stage) {

@@ -34,8 +34,7 @@ void copyBounded(std::span<const T> src, std::vector<T>& dst) {
 
 double stageMs(const FrameSlot& slot, int stage) {
   if (stage < 0) return 0.0;
-  const StageTiming& t = slot.timing[static_cast<std::size_t>(stage)];
-  return static_cast<double>(t.end_ns - t.start_ns) * 1e-6;
+  return slot.timing[static_cast<std::size_t>(stage)].serviceMs();
 }
 
 // Blocks of a motion field: at most one per 4x4 cell of the picture.
@@ -76,7 +75,7 @@ void captureTelemetry(const FrameSlot& slot, const StagePositions& stages, Telem
   // Arrival to the frame reaching the sinks: what a user of the pose waits.
   out.end_to_end_ms =
       stages.write >= 0
-          ? static_cast<double>(slot.timing[static_cast<std::size_t>(stages.write)].start_ns - slot.arrival_ns) * 1e-6
+          ? platform::nsToMs(slot.timing[static_cast<std::size_t>(stages.write)].start_ns - slot.arrival_ns)
           : 0.0;
   out.dropped = slot.dropped_so_far;
   out.damaged = slot.damaged_so_far;

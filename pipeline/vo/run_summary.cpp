@@ -5,13 +5,14 @@
 #include <algorithm>
 #include <iterator>
 
+#include "platform/realtime/clock.h"
 #include "voca/frontend/detector.h"
 
 namespace voca::pipeline {
 
 namespace {
 
-double ms(std::int64_t ns) { return static_cast<double>(ns) * 1e-6; }
+constexpr auto ms = platform::nsToMs;
 
 const StageReport* findStage(const RunReport& report, std::string_view name) {
   for (const StageReport& s : report.stages) {

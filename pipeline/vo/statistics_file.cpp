@@ -7,13 +7,14 @@
 #include <fstream>
 
 #include "formats/eval/eval_report_json.h"
+#include "platform/realtime/clock.h"
 #include "voca/core/error.h"
 
 namespace voca::pipeline {
 
 namespace {
 
-double ms(std::int64_t ns) { return static_cast<double>(ns) * 1e-6; }
+constexpr auto ms = platform::nsToMs;
 
 }  // namespace
 

@@ -9,6 +9,9 @@
 namespace voca::platform {
 
 // Nanoseconds of CLOCK_MONOTONIC: the same clock V4L2 stamps captured buffers with.
+// Nanoseconds as milliseconds, the unit reports and viewers show latency in.
+constexpr double nsToMs(std::int64_t ns) { return static_cast<double>(ns) * 1e-6; }
+
 inline std::int64_t monotonicNs() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
