@@ -16,16 +16,10 @@
 #include "tests/test_support.h"
 
 using namespace voca;
+using voca::test::twistOf;
+using voca::test::Vec6;
 
 namespace {
-
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-
-Vec6 twistOf(double vx, double vy, double vz, double wx, double wy, double wz) {
-  Vec6 xi;
-  xi << vx, vy, vz, wx, wy, wz;
-  return xi;
-}
 
 // Little-endian reads at a byte offset of a CDR buffer.
 template <typename T>

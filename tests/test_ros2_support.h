@@ -8,6 +8,7 @@
 #include <dds/ddsi/ddsi_serdata.h>
 #include <doctest/doctest.h>
 #include <stdlib.h>
+#include <Eigen/Core>
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +22,14 @@
 #include "tf2_msgs.h"
 
 namespace voca::test {
+
+// A body-frame twist (linear, angular) as the 6-vector the publisher's velocity helpers take.
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+inline Vec6 twistOf(double vx, double vy, double vz, double wx, double wy, double wz) {
+  Vec6 xi;
+  xi << vx, vy, vz, wx, wy, wz;
+  return xi;
+}
 
 inline constexpr const char* kLoopbackCycloneConfig =
     "<CycloneDDS><Domain id=\"any\">"
