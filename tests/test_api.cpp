@@ -105,6 +105,21 @@ std::string errorOf(const auto& call) {
   return {};
 }
 
+// Pushes the access units until one is refused, then finishes; the refusal's message, else the one
+// the run stopped with (a stage may fail after the last push was taken).
+std::string pushUntilRefused(voca_rt::Odometry& odometry, const std::vector<std::vector<std::uint8_t>>& left,
+                             const std::vector<std::vector<std::uint8_t>>& right, voca_rt::Summary& summary) {
+  std::string error;
+  for (std::size_t i = 0; i < left.size() && error.empty(); ++i) {
+    error = errorOf([&] {
+      odometry.pushH264(static_cast<std::int64_t>(i) * kFrameNs, left[i].data(), left[i].size(), right[i].data(),
+                        right[i].size());
+    });
+  }
+  summary = odometry.finish();
+  return error.empty() ? summary.error : error;
+}
+
 }  // namespace
 
 TEST_CASE("pushH264: every access unit gives one pose, in order, with the decode stage's latency") {
@@ -140,15 +155,8 @@ TEST_CASE("pushH264: a stream with B-frames stops the run with the decoder's mes
   voca_rt::Options options;
   options.calibration = rig();
   voca_rt::Odometry odometry(options);
-  std::string error;
-  for (std::size_t i = 0; i < left.size() && error.empty(); ++i) {
-    error = errorOf([&] {
-      odometry.pushH264(static_cast<std::int64_t>(i) * kFrameNs, left[i].data(), left[i].size(), right[i].data(),
-                        right[i].size());
-    });
-  }
-  const voca_rt::Summary summary = odometry.finish();
-  if (error.empty()) error = summary.error;
+  voca_rt::Summary summary;
+  const std::string error = pushUntilRefused(odometry, left, right, summary);
   INFO(error);
   CHECK(error.find("decode stage failed at frame") != std::string::npos);
   CHECK((error.find("B-frame") != std::string::npos || error.find("reorders frames") != std::string::npos));
@@ -165,15 +173,8 @@ TEST_CASE("pushH264: pictures of another size than the calibration's are named w
   voca_rt::Options options;
   options.calibration = rig();
   voca_rt::Odometry odometry(options);
-  std::string error;
-  for (std::size_t i = 0; i < left.size() && error.empty(); ++i) {
-    error = errorOf([&] {
-      odometry.pushH264(static_cast<std::int64_t>(i) * kFrameNs, left[i].data(), left[i].size(), right[i].data(),
-                        right[i].size());
-    });
-  }
-  const voca_rt::Summary summary = odometry.finish();
-  if (error.empty()) error = summary.error;
+  voca_rt::Summary summary;
+  const std::string error = pushUntilRefused(odometry, left, right, summary);
   INFO(error);
   CHECK(error.find("160x120") != std::string::npos);
   CHECK(error.find("320x240") != std::string::npos);
