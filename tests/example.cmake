@@ -7,4 +7,5 @@ voca_target_defaults(voca_example_odometry)
 add_test(NAME test_example_odometry
          COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test_example_odometry.sh $<TARGET_FILE:voca_example_odometry>
                  $<TARGET_FILE:voca> ${PROJECT_SOURCE_DIR}/../shared/data)
-set_tests_properties(test_example_odometry PROPERTIES LABELS e2e SKIP_RETURN_CODE 77 TIMEOUT 300)
+set_tests_properties(test_example_odometry PROPERTIES LABELS e2e SKIP_RETURN_CODE 77)
+voca_test_timeout(test_example_odometry 300)

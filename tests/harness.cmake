@@ -13,7 +13,8 @@ if(NOT VOCA_SYSTEM_PYTHON3)
   set(VOCA_SYSTEM_PYTHON3 python3)
 endif()
 add_test(NAME test_plot_suite COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/test_plot_suite.py)
-set_tests_properties(test_plot_suite PROPERTIES LABELS tools TIMEOUT 120 SKIP_RETURN_CODE 77)
+set_tests_properties(test_plot_suite PROPERTIES LABELS tools SKIP_RETURN_CODE 77)
+voca_test_timeout(test_plot_suite 120)
 # The benchmarks' cached default sequence, rendered and encoded for real (1 s).
 voca_add_test(test_bench_sequence_e2e SOURCES test_bench_sequence_e2e.cpp LIBS voca_harness voca_formats_dataset
               LABELS e2e TIMEOUT 600)

@@ -14,13 +14,19 @@ find_program(VOCA_SYSTEM_PYTHON3 python3 PATHS /usr/bin NO_DEFAULT_PATH)
 if(NOT VOCA_SYSTEM_PYTHON3)
   set(VOCA_SYSTEM_PYTHON3 python3)
 endif()
+# A target of the test's name builds what it runs, as for the doctest executables (tools/test.sh
+# builds a test by its name).
+add_custom_target(test_mcap_reader DEPENDS mcap_sample_writer)
 add_test(NAME test_mcap_reader
          COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/test_mcap_reader.py
                  --writer $<TARGET_FILE:mcap_sample_writer>)
 # Runs a host executable from Python: kept out of the emulated cross run.
-set_tests_properties(test_mcap_reader PROPERTIES LABELS "unit;noemu" TIMEOUT 300)
+set_tests_properties(test_mcap_reader PROPERTIES LABELS "unit;noemu")
+voca_test_timeout(test_mcap_reader 300)
 # `voca run --mcap` end to end through the same reader: every pose recorded, SIGINT, /dev/full.
 add_test(NAME test_mcap_run
          COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/test_mcap_run.py --voca $<TARGET_FILE:voca>
                  --data ${PROJECT_SOURCE_DIR}/../shared/data)
-set_tests_properties(test_mcap_run PROPERTIES LABELS e2e SKIP_RETURN_CODE 77 TIMEOUT 300)
+# Labelled threads: the run's MCAP writer thread beside the pipeline's.
+set_tests_properties(test_mcap_run PROPERTIES LABELS "e2e;threads" SKIP_RETURN_CODE 77)
+voca_test_timeout(test_mcap_run 300)

@@ -7,4 +7,5 @@ voca_add_test(test_synth_e2e SOURCES test_synth_e2e.cpp
 add_dependencies(test_synth_e2e voca)
 # The accuracy evaluation set's builder (a Python tool): its choice of window, on known answers.
 add_test(NAME test_make_eval_set COMMAND python3 ${CMAKE_CURRENT_SOURCE_DIR}/test_make_eval_set.py)
-set_tests_properties(test_make_eval_set PROPERTIES LABELS tools TIMEOUT 60)
+set_tests_properties(test_make_eval_set PROPERTIES LABELS tools)
+voca_test_timeout(test_make_eval_set 60)

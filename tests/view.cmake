@@ -5,9 +5,9 @@ voca_add_test(test_foxglove SOURCES test_foxglove.cpp LIBS voca_pipeline_sinks n
               LABELS asan)
 # Counts operator new (own executable, since it replaces the global allocator).
 voca_add_test(test_foxglove_alloc SOURCES test_foxglove_alloc.cpp LIBS voca_pipeline_sinks)
-voca_add_test(test_view_server SOURCES test_view_server.cpp LIBS voca_drivers_view LABELS asan TIMEOUT 60)
+voca_add_test(test_view_server SOURCES test_view_server.cpp LIBS voca_drivers_view LABELS asan TIMEOUT 60 THREADS)
 # The view through the runner's own options on a rendered raw sequence (renders with the `voca` binary).
-voca_add_test(test_view_run SOURCES test_view_run.cpp LIBS voca_pipeline_vo LABELS e2e TIMEOUT 600)
+voca_add_test(test_view_run SOURCES test_view_run.cpp LIBS voca_pipeline_vo LABELS e2e TIMEOUT 600 THREADS)
 add_dependencies(test_view_run voca)
 
 find_program(VOCA_SYSTEM_PYTHON3 python3 PATHS /usr/bin NO_DEFAULT_PATH)
@@ -20,4 +20,6 @@ add_test(NAME test_view COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DI
                                 ${view_test_cache})
 add_test(NAME test_view_page COMMAND ${VOCA_SYSTEM_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/test_view_page.py
                                      $<TARGET_FILE:voca> ${view_test_cache})
-set_tests_properties(test_view test_view_page PROPERTIES LABELS e2e TIMEOUT 600 SKIP_RETURN_CODE 77)
+set_tests_properties(test_view test_view_page PROPERTIES LABELS e2e SKIP_RETURN_CODE 77)
+voca_test_timeout(test_view 600)
+voca_test_timeout(test_view_page 600)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs the libFuzzer targets (tests/fuzz) built with AddressSanitizer + UBSan.
+# Runs the libFuzzer targets (tests/fuzz), built in the AddressSanitizer + UBSan tree (preset asan).
 #
 #   bash tools/fuzz.sh [seconds per target] [target...]     e.g. bash tools/fuzz.sh 600 fuzz_video
 #
@@ -12,10 +12,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
-launcher=()
-if command -v ccache >/dev/null; then launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-cmake --preset fuzz "${launcher[@]}" >/dev/null
-cmake --build --preset fuzz
+cmake --preset asan >/dev/null
+cmake --build --preset asan --target fuzzers
 
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
@@ -34,7 +32,7 @@ for target in "${targets[@]}"; do
   # New inputs go to build/fuzz/corpus (the first directory); the seeds are only read.
   # -rss_limit_mb: the video decoder may legitimately allocate a few hundred MB for a large frame.
   status=0
-  TMPDIR=${TMPDIR:-/tmp} "build/fuzz/bin/$target" "$found" "$seeds" -max_total_time="$seconds" \
+  TMPDIR=${TMPDIR:-/tmp} "build/asan/bin/$target" "$found" "$seeds" -max_total_time="$seconds" \
     -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -artifact_prefix="$crashes/" \
     >"$log" 2>&1 || status=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)

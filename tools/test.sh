@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
-# The test suite as CI runs it: install packages, build Release, run every test; then build the
-# bad-input tests with AddressSanitizer and run those again, and fuzz every input parser briefly.
+# The test suite as CI runs it: install packages; build Release and run the fast unit tests first,
+# then the end-to-end tests and the install checks; every test again with AddressSanitizer + UBSan;
+# the tests that run threads of ours with ThreadSanitizer; every input parser under libFuzzer; and,
+# in CI, the aarch64 cross build with its unit tests under qemu.
+#
+# Environment: VOCA_SANITIZERS=0 skips the ASan and TSan stages, VOCA_FUZZ_SECONDS=0 the fuzz stage,
+# VOCA_CROSS=0/1 the cross stage (default: on when CI=true).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -8,7 +13,8 @@ cd "$(dirname "$0")/.."
 stage_times=()
 stage_start=$SECONDS
 stage_done() {
-  stage_times+=("$(printf '%-34s %5d s' "$1" $((SECONDS - stage_start)))")
+  stage_times+=("$(printf '%-40s %5d s' "$1" $((SECONDS - stage_start)))")
+  echo "== $1: $((SECONDS - stage_start)) s"
   stage_start=$SECONDS
 }
 print_stage_times() {
@@ -17,53 +23,79 @@ print_stage_times() {
 }
 trap print_stage_times EXIT
 
+# The tests a preset's filter selects (CTest test names are their target names, except tests that
+# run a script: those name no target and build with what they run).
+preset_tests() {
+  ctest --preset "$1" -N "${@:2}" | sed -n 's/^ *Test *#[0-9]*: *//p'
+}
+# The subset of names that are build targets of the preset's tree.
+existing_targets() {
+  local preset=$1
+  shift
+  local all
+  all=$(ninja -C "build/$preset" -t targets all | sed 's/: .*//')
+  for name in "$@"; do
+    if grep -qx "$name" <<<"$all"; then echo "$name"; fi
+  done
+}
+
 bash tools/setup.sh
 stage_done "setup (packages)"
-cmake --workflow --preset test
-stage_done "release build and every test"
+
+# Release: the unit tests first, so a broken build or unit fails within minutes.
+cmake --preset release
+mapfile -t unit_tests < <(preset_tests release -L unit)
+cmake --build --preset release --target $(existing_targets release "${unit_tests[@]}")
+stage_done "release build (unit tests)"
+ctest --preset release -L unit
+stage_done "release unit tests"
+cmake --build --preset release
+stage_done "release build (the rest)"
+ctest --preset release -LE unit
+stage_done "release end-to-end tests"
 # Install stage: the installed tree (only the expected files), the CMake package and pkg-config file
 # used by programs built against it alone, the example's poses against the command line's, and the
 # amd64 Debian package (tools/check_install.sh).
-install_start=$SECONDS
 bash tools/check_install.sh release
-echo "install: installed tree, consumers and amd64 package checked in $((SECONDS - install_start)) s"
 stage_done "install, consumers, amd64 package"
-# The asan-labelled tests, as CTest lists them (test names are their target names); only those
-# are built with the sanitizers.
-cmake --preset asan >/dev/null
-asan_targets=$(ctest --preset asan -N | sed -n 's/^ *Test *#[0-9]*: *//p')
-if [ -n "${asan_targets}" ]; then
-  cmake --build --preset asan --target ${asan_targets}
+
+if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
+  # Every test with AddressSanitizer + UBSan; a report aborts the test (-fno-sanitize-recover=all).
+  cmake --preset asan >/dev/null
+  cmake --build --preset asan
+  stage_done "asan build"
   ctest --preset asan
+  stage_done "asan tests (all)"
+  # ThreadSanitizer: only the tests that run threads of ours, and what they run (the voca tool).
+  cmake --preset tsan >/dev/null
+  mapfile -t thread_tests < <(preset_tests tsan)
+  cmake --build --preset tsan --target voca $(existing_targets tsan "${thread_tests[@]}")
+  stage_done "tsan build"
+  ctest --preset tsan
+  stage_done "tsan tests (label threads)"
 fi
-stage_done "asan build and tests"
 
 # Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
 # committed seed corpora (regression inputs included); any crash, leak or sanitizer report fails.
 # VOCA_FUZZ_SECONDS changes the time per target; 0 skips the stage.
 fuzz_seconds=${VOCA_FUZZ_SECONDS:-10}
 if [ "${fuzz_seconds}" != 0 ]; then
-  fuzz_start=$SECONDS
   bash tools/fuzz.sh "${fuzz_seconds}"
-  echo "fuzz: build and runs took $((SECONDS - fuzz_start)) s"
+  stage_done "fuzz"
 fi
-stage_done "fuzz"
 
 # Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot
 # rot unnoticed. Runs in CI (CI=true) or with VOCA_CROSS=1; VOCA_CROSS=0 skips it. Builds only the
-# voca tool, the library and the unit-test executables (test names are their target names), not the
-# e2e tests; then packages the arm64 .deb and runs the example built against it under qemu.
+# voca tool, the library and the unit-test executables, not the e2e tests; then packages the arm64
+# .deb and runs the example built against it under qemu.
 if [ "${VOCA_CROSS:-$([ "${CI:-}" = true ] && echo 1 || echo 0)}" = 1 ]; then
-  cross_start=$SECONDS
   bash tools/cross-setup.sh aarch64
   cmake --preset aarch64
-  cross_targets=$(ctest --preset aarch64 -N | sed -n 's/^ *Test *#[0-9]*: *//p')
-  cmake --build --preset aarch64 --target voca voca_rt ${cross_targets}
+  mapfile -t cross_tests < <(preset_tests aarch64)
+  cmake --build --preset aarch64 --target voca voca_rt $(existing_targets aarch64 "${cross_tests[@]}")
+  stage_done "cross build"
   ctest --preset aarch64
-  echo "cross: aarch64 setup, build and emulated unit tests took $((SECONDS - cross_start)) s"
-  stage_done "cross build and emulated tests"
-  cross_package_start=$SECONDS
+  stage_done "cross emulated unit tests"
   bash tools/check_install.sh aarch64
-  echo "cross: arm64 package and the example built against it checked in $((SECONDS - cross_package_start)) s"
   stage_done "arm64 package and example"
 fi
