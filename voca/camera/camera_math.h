@@ -73,6 +73,42 @@ inline double firstFailure(Predicate ok, double x_end, int steps) {
   return x_end;
 }
 
+// The weight w of the valid regions of ds and eucm: alpha/(1-alpha) for alpha <= 0.5 (the denominator
+// stays positive), (1-alpha)/alpha above (the projection stays injective). eucm projects for
+// z > -w d; ds derives its bound w2 from it.
+template <typename Scalar>
+inline Scalar validRegionWeight(Scalar alpha) {
+  return alpha <= Scalar(0.5) ? alpha / (Scalar(1) - alpha) : (Scalar(1) - alpha) / alpha;
+}
+
+// ds and eucm project as u = fx x / den + cx, v = fy y / den + cy with mx = x / den, my = y / den;
+// only den(p) differs. Their Jacobians by the point, from den's gradient d_den_d_p:
+template <typename Scalar>
+inline void projectionOverDenominatorJacobian(Scalar fx, Scalar fy, Scalar mx, Scalar my, Scalar inv_den,
+                                              const Eigen::Matrix<Scalar, 3, 1>& d_den_d_p,
+                                              Eigen::Matrix<Scalar, 2, 3>& d_uv_d_p) {
+  d_uv_d_p.row(0) = -fx * mx * inv_den * d_den_d_p.transpose();
+  d_uv_d_p.row(1) = -fy * my * inv_den * d_den_d_p.transpose();
+  d_uv_d_p(0, 0) += fx * inv_den;
+  d_uv_d_p(1, 1) += fy * inv_den;
+}
+
+// ... and by the parameters fx fy cx cy p4 p5, from den's derivatives by the two model parameters.
+template <typename Scalar>
+inline void projectionOverDenominatorParamJacobian(Scalar fx, Scalar fy, Scalar mx, Scalar my, Scalar inv_den,
+                                                   Scalar d_den_d_p4, Scalar d_den_d_p5,
+                                                   Eigen::Matrix<Scalar, 2, 6>& j) {
+  j.setZero();
+  j(0, 0) = mx;
+  j(1, 1) = my;
+  j(0, 2) = Scalar(1);
+  j(1, 3) = Scalar(1);
+  j(0, 4) = -fx * mx * inv_den * d_den_d_p4;
+  j(1, 4) = -fy * my * inv_den * d_den_d_p4;
+  j(0, 5) = -fx * mx * inv_den * d_den_d_p5;
+  j(1, 5) = -fy * my * inv_den * d_den_d_p5;
+}
+
 // Two points through model.project() one at a time, as a two-lane projectPair() returns them: bit i
 // set when point i projects; Jacobians when d_uv_d_p[0] is set.
 template <typename Model, typename Vec3, typename Vec2, typename Mat23>

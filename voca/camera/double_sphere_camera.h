@@ -25,7 +25,7 @@ class DoubleSphereCamera {
 
   explicit DoubleSphereCamera(const Params& params) : params_(params) {
     const Scalar xi = params_[4], alpha = params_[5];
-    const Scalar w1 = alpha <= Scalar(0.5) ? alpha / (Scalar(1) - alpha) : (Scalar(1) - alpha) / alpha;
+    const Scalar w1 = camera_detail::validRegionWeight(alpha);
     const Scalar w2_den = Scalar(2) * w1 * xi + xi * xi + Scalar(1);
     // w2_den = (w1 + xi)^2 + 1 - w1^2 >= 0 since w1 <= 1; it is zero only for alpha = 0.5, xi = -1.
     w2_ = w2_den > Scalar(0) ? (w1 + xi) / std::sqrt(w2_den) : Scalar(1);
@@ -57,24 +57,13 @@ class DoubleSphereCamera {
       d_k_d_p[2] += Scalar(1);
       const Vec3 d_d2_d_p = (Vec3(x, y, Scalar(0)) + k * d_k_d_p) / d2;
       const Vec3 d_den_d_p = alpha * d_d2_d_p + (Scalar(1) - alpha) * d_k_d_p;
-      d_uv_d_p->row(0) = -fx * mx * inv_den * d_den_d_p.transpose();
-      d_uv_d_p->row(1) = -fy * my * inv_den * d_den_d_p.transpose();
-      (*d_uv_d_p)(0, 0) += fx * inv_den;
-      (*d_uv_d_p)(1, 1) += fy * inv_den;
+      camera_detail::projectionOverDenominatorJacobian(fx, fy, mx, my, inv_den, d_den_d_p, *d_uv_d_p);
     }
     if (d_uv_d_params) {
-      ParamJacobian& j = *d_uv_d_params;
-      j.setZero();
-      j(0, 0) = mx;
-      j(1, 1) = my;
-      j(0, 2) = Scalar(1);
-      j(1, 3) = Scalar(1);
       const Scalar d_den_d_xi = alpha * k * d1 / d2 + (Scalar(1) - alpha) * d1;
       const Scalar d_den_d_alpha = d2 - k;
-      j(0, 4) = -fx * mx * inv_den * d_den_d_xi;
-      j(1, 4) = -fy * my * inv_den * d_den_d_xi;
-      j(0, 5) = -fx * mx * inv_den * d_den_d_alpha;
-      j(1, 5) = -fy * my * inv_den * d_den_d_alpha;
+      camera_detail::projectionOverDenominatorParamJacobian(fx, fy, mx, my, inv_den, d_den_d_xi, d_den_d_alpha,
+                                                            *d_uv_d_params);
     }
     return true;
   }

@@ -25,7 +25,7 @@ class ExtendedUnifiedCamera {
 
   explicit ExtendedUnifiedCamera(const Params& params) : params_(params) {
     const Scalar alpha = params_[4];
-    w_ = alpha <= Scalar(0.5) ? alpha / (Scalar(1) - alpha) : (Scalar(1) - alpha) / alpha;
+    w_ = camera_detail::validRegionWeight(alpha);
   }
   const Params& params() const { return params_; }
   template <typename Other>
@@ -33,8 +33,7 @@ class ExtendedUnifiedCamera {
     return ExtendedUnifiedCamera<Other>(params_.template cast<Other>());
   }
 
-  // False outside the valid region z > -w d, w = alpha/(1-alpha) for alpha <= 0.5 (the
-  // denominator stays positive), (1-alpha)/alpha above (the projection stays injective).
+  // False outside the valid region z > -w d (w: camera_detail::validRegionWeight).
   bool project(const Vec3& p_cam, Vec2& uv, Mat23* d_uv_d_p = nullptr, ParamJacobian* d_uv_d_params = nullptr) const {
     const Scalar fx = params_[0], fy = params_[1], cx = params_[2], cy = params_[3];
     const Scalar alpha = params_[4], beta = params_[5];
@@ -49,24 +48,13 @@ class ExtendedUnifiedCamera {
     uv << fx * mx + cx, fy * my + cy;
     if (d_uv_d_p) {
       const Vec3 d_den_d_p = Vec3(alpha * beta * x / d, alpha * beta * y / d, alpha * z / d + Scalar(1) - alpha);
-      d_uv_d_p->row(0) = -fx * mx * inv_den * d_den_d_p.transpose();
-      d_uv_d_p->row(1) = -fy * my * inv_den * d_den_d_p.transpose();
-      (*d_uv_d_p)(0, 0) += fx * inv_den;
-      (*d_uv_d_p)(1, 1) += fy * inv_den;
+      camera_detail::projectionOverDenominatorJacobian(fx, fy, mx, my, inv_den, d_den_d_p, *d_uv_d_p);
     }
     if (d_uv_d_params) {
-      ParamJacobian& j = *d_uv_d_params;
-      j.setZero();
-      j(0, 0) = mx;
-      j(1, 1) = my;
-      j(0, 2) = Scalar(1);
-      j(1, 3) = Scalar(1);
       const Scalar d_den_d_alpha = d - z;
       const Scalar d_den_d_beta = alpha * r2 / (Scalar(2) * d);
-      j(0, 4) = -fx * mx * inv_den * d_den_d_alpha;
-      j(1, 4) = -fy * my * inv_den * d_den_d_alpha;
-      j(0, 5) = -fx * mx * inv_den * d_den_d_beta;
-      j(1, 5) = -fy * my * inv_den * d_den_d_beta;
+      camera_detail::projectionOverDenominatorParamJacobian(fx, fy, mx, my, inv_den, d_den_d_alpha, d_den_d_beta,
+                                                            *d_uv_d_params);
     }
     return true;
   }
