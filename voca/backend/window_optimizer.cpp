@@ -55,8 +55,8 @@ constexpr double kPoseStepConvergedNorm = 1e-5;
 }
 
 // subtractProductTransposed on AVX: per column j of dst, the columns of A (rows 0-3 and 4-5) times
-// B(j, k), combined, then subtracted. A's columns are loaded once: reloading them per column of dst
-// (which the compiler must do, dst could alias A) made the kernel ~7 % slower.
+// B(j, k), combined, then subtracted. A's columns are loaded once, before the columns of dst: the
+// compiler cannot hoist the loads itself, since dst could alias A.
 [[gnu::target("avx")]] void subtractProductTransposedAvx(const Eigen::Matrix<double, 6, 3>& A,
                                                          const Eigen::Matrix<double, 6, 3>& B, double* dst,
                                                          std::ptrdiff_t stride) {
@@ -150,9 +150,9 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
 // ---- single-frame pose step ---------------------------------------------------------------------
 
 // The passes over the residuals are [[gnu::flatten]]: GCC inlines neither reprojectLandmark nor the
-// camera model's project() behind GenericCamera's std::visit, and as calls (Jacobians passed through
-// memory) they took 13 % of the bench's samples; inlined, the backend takes ~7 % less time. Same
-// arithmetic in the same order, so the same values.
+// camera model's project() behind GenericCamera's std::visit on its own, and as calls they pass the
+// Jacobians through memory for every residual, a large share of the backend's time. Same arithmetic
+// in the same order, so the same values.
 [[gnu::flatten]] int WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
   const LandmarkStore& landmarks = state.landmarks;
   const std::uint32_t bits = frameBits(frame);

@@ -27,13 +27,13 @@ struct WindowState {
 };
 
 // dst(i, j) += sign (A B^T)(i, j) for i >= j, dst a 6x6 block, A and B 6xK: the lower triangle of a
-// symmetric block. The diagonal blocks of the reduced camera system (whose LDLT reads nothing else;
-// the upper half was a third of the block products formed per landmark) and the host-host
+// symmetric block. The diagonal blocks of the reduced camera system (whose LDLT reads nothing else,
+// so forming the upper half would add a third to the block products per landmark) and the host-host
 // information of a frame pair (mirrored once per pair, not formed per residual). It goes in column
 // pairs from the diagonal down, (0,1), (2,3), (4,5), so every column is whole SSE2 packets of two
 // rows; the pairs also reach the three entries just above the diagonal (0,1), (2,3), (4,5), which
 // are left changed. Eigen's packet product sums ((a0 b0 + a1 b1) + a2 b2) as the full block product
-// does, so the entries are the same bit for bit. Always inlined: GCC kept it as a call in the Schur
+// does, so the entries are the same bit for bit. Always inlined: GCC would leave it a call in the Schur
 // loop, once per landmark and frame.
 enum class Accumulate { kAdd, kSubtract };
 template <Accumulate kOp, typename Dst, typename Product>
