@@ -11,7 +11,7 @@
 #include <numbers>
 #include <random>
 
-#include "voca/camera/camera_models.h"
+#include "voca/camera/fast_atan2.h"
 #include "voca/camera/generic_camera.h"
 
 namespace {

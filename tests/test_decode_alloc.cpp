@@ -57,7 +57,7 @@ TEST_CASE("decoder: no heap allocation per frame after warm-up, with motion expo
   voca::decode::VideoDecoder decoder(demuxer.stream(), options, nullptr, "a.mp4");
   voca::decode::DecodedFrame frame;
   frame.reserve(kWidth, kHeight);
-  voca::IFrameBridge bridge(kWidth, kHeight);
+  voca::MotionPriorBridge bridge(kWidth, kHeight);
 
   int decoded = 0, with_vectors = 0, bridged = 0;
   long steady_allocations = 0;

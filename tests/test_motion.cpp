@@ -223,7 +223,7 @@ TEST_CASE("copies keep the full capacity, so a copied field still takes a whole 
 }
 
 TEST_CASE("I-frame bridging: the last field with vectors carries over I-frames, never across a gap") {
-  voca::IFrameBridge bridge(64, 64);
+  voca::MotionPriorBridge bridge(64, 64);
   MotionField p(64, 64), i_frame(64, 64), b_frame(64, 64);
   const auto makeInter = [](MotionField& field, PictureType type, float dx) {
     field.reset(64, 64, type);
@@ -247,7 +247,7 @@ TEST_CASE("I-frame bridging: the last field with vectors carries over I-frames, 
   // the decoder reuses.
   const MotionField* carried = nullptr;
   {
-    voca::IFrameBridge fresh(64, 64);
+    voca::MotionPriorBridge fresh(64, 64);
     makeInter(p, PictureType::kP, 2.f);
     REQUIRE(fresh.prior(p, 0, bridged) == &p);
     p.reset(64, 64, PictureType::kP);  // overwritten by the next decode
@@ -290,7 +290,7 @@ TEST_CASE("I-frame bridging: the last field with vectors carries over I-frames, 
   bridge.clear();
   bridged = false;
   CHECK(bridge.prior(i_frame, 0, bridged) == nullptr);
-  voca::IFrameBridge disabled(64, 64, false);
+  voca::MotionPriorBridge disabled(64, 64, false);
   CHECK(disabled.prior(p, 0, bridged) == &p);
   CHECK(disabled.prior(i_frame, 0, bridged) == nullptr);
   CHECK_FALSE(bridged);

@@ -4,7 +4,7 @@
 
 #include <cstring>
 
-#include "drivers/decode/ffmpeg_util.h"
+#include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
 extern "C" {
@@ -15,7 +15,7 @@ namespace voca::decode {
 
 struct AnnexBConverter::Impl {
   AVBSFContext* filter = nullptr;
-  std::unique_ptr<AVPacket, detail::PacketDeleter> packet{av_packet_alloc()};
+  ffmpeg::PacketPtr packet{av_packet_alloc()};
   ~Impl() { av_bsf_free(&filter); }
 };
 
@@ -27,7 +27,7 @@ AnnexBConverter::AnnexBConverter(const StreamInfo& stream) : impl_(std::make_uni
   const AVBitStreamFilter* bsf = av_bsf_get_by_name("h264_mp4toannexb");
   if (bsf == nullptr) throw RuntimeFailure("libavcodec lacks the h264_mp4toannexb bitstream filter");
   int rc = av_bsf_alloc(bsf, &impl_->filter);
-  if (rc < 0) throw RuntimeFailure("cannot allocate the h264_mp4toannexb filter: " + detail::avErrorText(rc));
+  if (rc < 0) throw RuntimeFailure("cannot allocate the h264_mp4toannexb filter: " + ffmpeg::avErrorText(rc));
   AVCodecParameters* par = impl_->filter->par_in;
   par->codec_type = AVMEDIA_TYPE_VIDEO;
   par->codec_id = AV_CODEC_ID_H264;
@@ -39,7 +39,7 @@ AnnexBConverter::AnnexBConverter(const StreamInfo& stream) : impl_(std::make_uni
   par->extradata_size = static_cast<int>(stream.extradata.size());
   impl_->filter->time_base_in = AVRational{stream.time_base_num, stream.time_base_den};
   rc = av_bsf_init(impl_->filter);
-  if (rc < 0) throw InputError("the stream's avcC header cannot be read: " + detail::avErrorText(rc));
+  if (rc < 0) throw InputError("the stream's avcC header cannot be read: " + ffmpeg::avErrorText(rc));
 }
 
 AnnexBConverter::~AnnexBConverter() = default;
@@ -51,7 +51,7 @@ void AnnexBConverter::convert(const Packet& packet, std::vector<std::uint8_t>& o
   }
   AVPacket* p = impl_->packet.get();
   int rc = av_new_packet(p, static_cast<int>(packet.bytes.size()));
-  if (rc < 0) throw RuntimeFailure("cannot allocate a packet: " + detail::avErrorText(rc));
+  if (rc < 0) throw RuntimeFailure("cannot allocate a packet: " + ffmpeg::avErrorText(rc));
   std::memcpy(p->data, packet.bytes.data(), packet.bytes.size());
   p->pts = packet.pts;
   p->dts = packet.dts;
@@ -60,7 +60,7 @@ void AnnexBConverter::convert(const Packet& packet, std::vector<std::uint8_t>& o
   if (rc < 0) {
     av_packet_unref(p);
     throw InputError(
-        fmt::format("packet {}: not a length-prefixed H.264 access unit ({})", packet.index, detail::avErrorText(rc)));
+        fmt::format("packet {}: not a length-prefixed H.264 access unit ({})", packet.index, ffmpeg::avErrorText(rc)));
   }
   out.clear();
   while ((rc = av_bsf_receive_packet(impl_->filter, p)) == 0) {
@@ -68,7 +68,7 @@ void AnnexBConverter::convert(const Packet& packet, std::vector<std::uint8_t>& o
     av_packet_unref(p);
   }
   if (rc != AVERROR(EAGAIN) && rc != AVERROR_EOF) {
-    throw InputError(fmt::format("packet {}: cannot convert to Annex B ({})", packet.index, detail::avErrorText(rc)));
+    throw InputError(fmt::format("packet {}: cannot convert to Annex B ({})", packet.index, ffmpeg::avErrorText(rc)));
   }
 }
 

@@ -3,11 +3,12 @@
 #include <algorithm>
 
 #include "drivers/decode/ffmpeg_util.h"
+#include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
 namespace voca::decode {
 
-using detail::avErrorText;
+using ffmpeg::avErrorText;
 
 const char* videoCodecName(VideoCodec codec) {
   switch (codec) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/decode/ffmpeg_util.h"
+#include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
 extern "C" {
@@ -21,14 +22,14 @@ extern "C" {
 
 namespace voca::decode {
 
-using detail::avErrorText;
+using ffmpeg::avErrorText;
 
 namespace {
 
-using CodecPtr = std::unique_ptr<AVCodecContext, detail::CodecContextDeleter>;
-using FramePtr = std::unique_ptr<AVFrame, detail::FrameDeleter>;
-using PacketPtr = std::unique_ptr<AVPacket, detail::PacketDeleter>;
-using BufferPtr = std::unique_ptr<AVBufferRef, detail::BufferDeleter>;
+using ffmpeg::BufferPtr;
+using ffmpeg::CodecContextPtr;
+using ffmpeg::FramePtr;
+using ffmpeg::PacketPtr;
 
 // The MV parse runs ahead of a hardware decoder by that decoder's internal queue depth.
 constexpr std::size_t kMotionQueueDepth = 32;
@@ -39,13 +40,13 @@ constexpr int kMaxPixelReorder = 8;
 // A libavcodec context as the pixel decoder (software, VAAPI or V4L2 M2M).
 class CodecPixelDecoder final : public PixelDecoder {
  public:
-  explicit CodecPixelDecoder(CodecPtr ctx) : ctx_(std::move(ctx)) {}
+  explicit CodecPixelDecoder(CodecContextPtr ctx) : ctx_(std::move(ctx)) {}
   int send(const AVPacket* packet) override { return avcodec_send_packet(ctx_.get(), packet); }
   int receive(AVFrame* frame) override { return avcodec_receive_frame(ctx_.get(), frame); }
   const AVCodecContext* context() const { return ctx_.get(); }
 
  private:
-  CodecPtr ctx_;
+  CodecContextPtr ctx_;
 };
 
 void logChoiceOnce(const std::string& line) {
@@ -122,7 +123,7 @@ struct VideoDecoder::Impl {
   DecoderChoice choice;
   const AVCodecContext* pixel_context = nullptr;  // the libavcodec pixel decoder, if pixel is one
   std::unique_ptr<PixelDecoder> pixel;            // produces the output frames (software, or the hardware decoder)
-  CodecPtr motion;                                // hardware decoders only: software parse for the motion vectors
+  CodecContextPtr motion;                         // hardware decoders only: software parse for the motion vectors
   BufferPtr hw_device;
   FramePtr frame, transfer;
   PacketPtr packet;
@@ -154,15 +155,15 @@ struct VideoDecoder::Impl {
     packet.reset(av_packet_alloc());
     if (!frame || !transfer || !packet) throw RuntimeFailure("out of memory allocating decoder buffers");
   }
-  CodecPtr allocContext(const AVCodec* codec) const;
-  CodecPtr openSoftware(bool motion_only) const;
-  CodecPtr openVaapi();
-  CodecPtr openV4l2m2m() const;
+  CodecContextPtr allocContext(const AVCodec* codec) const;
+  CodecContextPtr openSoftware(bool motion_only) const;
+  CodecContextPtr openVaapi();
+  CodecContextPtr openV4l2m2m() const;
   void open(DecoderKind kind);
   void checkSend(int rc, const AVPacket* pkt, std::int64_t index);
   void drainMotion();
   void allocMotionSlots();
-  void usePixel(CodecPtr ctx) {
+  void usePixel(CodecContextPtr ctx) {
     auto decoder = std::make_unique<CodecPixelDecoder>(std::move(ctx));
     pixel_context = decoder->context();
     pixel = std::move(decoder);
@@ -240,8 +241,8 @@ void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
 }
 
 // A context for `codec` that knows the stream's frame size, time base and out-of-band headers.
-CodecPtr VideoDecoder::Impl::allocContext(const AVCodec* codec) const {
-  CodecPtr ctx(avcodec_alloc_context3(codec));
+CodecContextPtr VideoDecoder::Impl::allocContext(const AVCodec* codec) const {
+  CodecContextPtr ctx(avcodec_alloc_context3(codec));
   if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
   ctx->width = stream.width;
   ctx->height = stream.height;
@@ -256,10 +257,10 @@ bool lumaOnlyDecodingAvailable() {
   return available;
 }
 
-CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
+CodecContextPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
   if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
-  CodecPtr ctx = allocContext(codec);
+  CodecContextPtr ctx = allocContext(codec);
   // One thread, slice threading only: frame threading delays output and costs memory per thread.
   ctx->thread_count = 1;
   ctx->thread_type = FF_THREAD_SLICE;
@@ -280,7 +281,7 @@ CodecPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   return ctx;
 }
 
-CodecPtr VideoDecoder::Impl::openVaapi() {
+CodecContextPtr VideoDecoder::Impl::openVaapi() {
   const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
   if (codec == nullptr || !detail::codecSupportsVaapi(codec)) {
     throw RuntimeFailure(source + ": libavcodec cannot decode " + stream.codec_name + " with VAAPI");
@@ -291,7 +292,7 @@ CodecPtr VideoDecoder::Impl::openVaapi() {
     throw RuntimeFailure("cannot open VAAPI device " + options.vaapi_device + " (" + avErrorText(rc) + ")");
   }
   hw_device.reset(device);
-  CodecPtr ctx = allocContext(codec);
+  CodecContextPtr ctx = allocContext(codec);
   ctx->hw_device_ctx = av_buffer_ref(hw_device.get());
   if (ctx->hw_device_ctx == nullptr) throw RuntimeFailure("out of memory referencing the VAAPI device");
   ctx->get_format = pickVaapiFormat;
@@ -302,11 +303,11 @@ CodecPtr VideoDecoder::Impl::openVaapi() {
   return ctx;
 }
 
-CodecPtr VideoDecoder::Impl::openV4l2m2m() const {
+CodecContextPtr VideoDecoder::Impl::openV4l2m2m() const {
   const char* name = detail::v4l2m2mDecoderName(stream.codec);
   const AVCodec* codec = name == nullptr ? nullptr : avcodec_find_decoder_by_name(name);
   if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no V4L2 M2M decoder for " + stream.codec_name);
-  CodecPtr ctx = allocContext(codec);
+  CodecContextPtr ctx = allocContext(codec);
   const int rc = avcodec_open2(ctx.get(), codec, nullptr);
   if (rc < 0) {
     throw RuntimeFailure(source + ": cannot open " + name + " (" + avErrorText(rc) +

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "drivers/decode/ffmpeg_util.h"
+#include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
 extern "C" {
@@ -13,20 +13,18 @@ extern "C" {
 
 namespace voca::encode {
 
-namespace detail = decode::detail;
-
 struct JpegEncoder::Impl {
   int width = 0, height = 0;  // of the pictures given
   int quality = 5;
-  std::unique_ptr<AVCodecContext, detail::CodecContextDeleter> codec;
-  std::unique_ptr<AVFrame, detail::FrameDeleter> frame;
-  std::unique_ptr<AVPacket, detail::PacketDeleter> packet;
+  ffmpeg::CodecContextPtr codec;
+  ffmpeg::FramePtr frame;
+  ffmpeg::PacketPtr packet;
   SwsContext* sws = nullptr;
   std::int64_t next_pts = 0;
 
   ~Impl() { sws_freeContext(sws); }
   void check(int rc, const char* what) const {
-    if (rc < 0) throw RuntimeFailure(fmt::format("JPEG encoder: {} ({})", what, detail::avErrorText(rc)));
+    if (rc < 0) throw RuntimeFailure(fmt::format("JPEG encoder: {} ({})", what, ffmpeg::avErrorText(rc)));
   }
 };
 

@@ -4,19 +4,18 @@
 #include <system_error>
 #include <utility>
 
-#include "drivers/decode/ffmpeg_util.h"
+#include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
 extern "C" {
+#include <libavformat/avformat.h>
 #include <libavutil/opt.h>
 #include <libswscale/swscale.h>
 }
 
 namespace voca::encode {
 
-// The libav* RAII helpers shared by the drivers (header-only).
-namespace detail = decode::detail;
-using detail::avErrorText;
+using ffmpeg::avErrorText;
 
 struct RgbVideoWriter::Impl {
   std::filesystem::path path;
@@ -24,9 +23,9 @@ struct RgbVideoWriter::Impl {
   AVIOContext* file = nullptr;  // opened by the constructor, handed to `format` by open()
   AVFormatContext* format = nullptr;
   AVStream* stream = nullptr;
-  std::unique_ptr<AVCodecContext, detail::CodecContextDeleter> codec;
-  std::unique_ptr<AVFrame, detail::FrameDeleter> frame;
-  std::unique_ptr<AVPacket, detail::PacketDeleter> packet;
+  ffmpeg::CodecContextPtr codec;
+  ffmpeg::FramePtr frame;
+  ffmpeg::PacketPtr packet;
   SwsContext* sws = nullptr;
   std::int64_t next_pts = 0;
   bool header_written = false, finished = false, open_failed = false;

@@ -24,6 +24,7 @@ extern "C" {
 #include <libavutil/opt.h>
 }
 
+#include "drivers/ffmpeg/av_objects.h"
 #include "platform/filesystem/temp_dir.h"
 #include "platform/process/child_process.h"
 #include "voca/core/error.h"
@@ -35,31 +36,11 @@ namespace {
 constexpr std::array<std::string_view, 5> kSupportedCodecs = {"libx264", "mpeg4", "mpeg2video", "h264_v4l2m2m",
                                                               "h264_vaapi"};
 
-std::string avError(int code) {
-  std::array<char, AV_ERROR_MAX_STRING_SIZE> text{};
-  av_strerror(code, text.data(), text.size());
-  return text.data();
-}
-
-struct CodecContextDeleter {
-  void operator()(AVCodecContext* ctx) const {
-    av_freep(&ctx->stats_in);  // the caller's to free (set for mpegvideo's second pass)
-    avcodec_free_context(&ctx);
-  }
-};
-struct FrameDeleter {
-  void operator()(AVFrame* frame) const { av_frame_free(&frame); }
-};
-struct PacketDeleter {
-  void operator()(AVPacket* packet) const { av_packet_free(&packet); }
-};
-struct BufferDeleter {
-  void operator()(AVBufferRef* buffer) const { av_buffer_unref(&buffer); }
-};
-using BufferPtr = std::unique_ptr<AVBufferRef, BufferDeleter>;
-using CodecContextPtr = std::unique_ptr<AVCodecContext, CodecContextDeleter>;
-using FramePtr = std::unique_ptr<AVFrame, FrameDeleter>;
-using PacketPtr = std::unique_ptr<AVPacket, PacketDeleter>;
+using ffmpeg::avErrorText;
+using ffmpeg::BufferPtr;
+using ffmpeg::CodecContextPtr;
+using ffmpeg::FramePtr;
+using ffmpeg::PacketPtr;
 
 std::string readWholeFile(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -112,7 +93,7 @@ namespace {
 BufferPtr createVaapiDevice(const std::string& device) {
   AVBufferRef* ref = nullptr;
   if (const int r = av_hwdevice_ctx_create(&ref, AV_HWDEVICE_TYPE_VAAPI, device.c_str(), nullptr, 0); r < 0) {
-    throw RuntimeFailure(fmt::format("cannot open the VAAPI device {}: {}", device, avError(r)));
+    throw RuntimeFailure(fmt::format("cannot open the VAAPI device {}: {}", device, avErrorText(r)));
   }
   return BufferPtr(ref);
 }
@@ -128,7 +109,7 @@ BufferPtr createVaapiFrames(AVBufferRef* device, int width, int height) {
   desc->height = height;
   desc->initial_pool_size = 8;
   if (const int r = av_hwframe_ctx_init(frames.get()); r < 0) {
-    throw RuntimeFailure(fmt::format("cannot create {}x{} VAAPI surfaces: {}", width, height, avError(r)));
+    throw RuntimeFailure(fmt::format("cannot create {}x{} VAAPI surfaces: {}", width, height, avErrorText(r)));
   }
   return frames;
 }
@@ -221,7 +202,7 @@ struct VideoEncoder::Impl {
     while (true) {
       const int ret = avcodec_receive_packet(ctx.get(), packet.get());
       if (ret == AVERROR(EAGAIN) || ret == AVERROR_EOF) break;
-      if (ret < 0) throw RuntimeFailure(fmt::format("{} encoder failed: {}", settings.codec, avError(ret)));
+      if (ret < 0) throw RuntimeFailure(fmt::format("{} encoder failed: {}", settings.codec, avErrorText(ret)));
       if (num_packets == packets.size()) packets.emplace_back();
       EncodedPacket& out = packets[num_packets++];
       out.bytes.assign(packet->data, packet->data + packet->size);
@@ -373,7 +354,7 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
         fmt::format("cannot open the {} encoder for {}x{} at {} bit/s, {}/{} fps ({}); check the "
                     "settings (x264 params '{}')",
                     settings.codec, coded_width, coded_height, settings.bitrate_bps, settings.fps_num, settings.fps_den,
-                    avError(ret), settings.x264_params));
+                    avErrorText(ret), settings.x264_params));
   }
   if (!unused.empty()) throw InputError(fmt::format("{} encoder does not know the options:{}", settings.codec, unused));
 
@@ -385,7 +366,7 @@ void VideoEncoder::open(const EncoderSettings& settings, int width, int height, 
   frame->height = coded_height;
   frame->color_range = AVCOL_RANGE_JPEG;
   if (const int r = av_frame_get_buffer(frame.get(), 0); r < 0) {
-    throw RuntimeFailure(fmt::format("cannot allocate a {}x{} frame: {}", coded_width, coded_height, avError(r)));
+    throw RuntimeFailure(fmt::format("cannot allocate a {}x{} frame: {}", coded_width, coded_height, avErrorText(r)));
   }
   fillNeutralChroma(*frame);
   if (vaapi) {
@@ -415,7 +396,7 @@ std::span<const EncodedPacket> VideoEncoder::encode(GrayView image, std::int64_t
   s.num_packets = 0;
   // The codec may still reference the previous frame's buffer; this copies (chroma included) if so.
   if (const int r = av_frame_make_writable(s.frame.get()); r < 0) {
-    throw RuntimeFailure(fmt::format("cannot get a writable frame: {}", avError(r)));
+    throw RuntimeFailure(fmt::format("cannot get a writable frame: {}", avErrorText(r)));
   }
   AVFrame& frame = *s.frame;
   for (int y = 0; y < frame.height; ++y) {
@@ -428,17 +409,17 @@ std::span<const EncodedPacket> VideoEncoder::encode(GrayView image, std::int64_t
     // VAAPI: a surface from the frames pool (recycled, no allocation once warm), filled by upload.
     av_frame_unref(s.hw_frame.get());
     if (const int r = av_hwframe_get_buffer(s.hw_frames.get(), s.hw_frame.get(), 0); r < 0) {
-      throw RuntimeFailure(fmt::format("no free VAAPI surface for frame pts {}: {}", pts, avError(r)));
+      throw RuntimeFailure(fmt::format("no free VAAPI surface for frame pts {}: {}", pts, avErrorText(r)));
     }
     if (const int r = av_hwframe_transfer_data(s.hw_frame.get(), &frame, 0); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot upload frame pts {} to the GPU: {}", pts, avError(r)));
+      throw RuntimeFailure(fmt::format("cannot upload frame pts {} to the GPU: {}", pts, avErrorText(r)));
     }
     s.hw_frame->pts = pts;
     input = s.hw_frame.get();
   }
   const int ret = avcodec_send_frame(s.ctx.get(), input);
   if (ret < 0)
-    throw RuntimeFailure(fmt::format("{} encoder rejected frame pts {}: {}", s.settings.codec, pts, avError(ret)));
+    throw RuntimeFailure(fmt::format("{} encoder rejected frame pts {}: {}", s.settings.codec, pts, avErrorText(ret)));
   s.drain();
   return {s.packets.data(), s.num_packets};
 }
@@ -449,7 +430,7 @@ std::span<const EncodedPacket> VideoEncoder::flush() {
   s.num_packets = 0;
   if (s.flushed) return {};
   if (const int ret = avcodec_send_frame(s.ctx.get(), nullptr); ret < 0) {
-    throw RuntimeFailure(fmt::format("{} encoder failed to flush: {}", s.settings.codec, avError(ret)));
+    throw RuntimeFailure(fmt::format("{} encoder failed to flush: {}", s.settings.codec, avErrorText(ret)));
   }
   s.drain();
   s.flushed = true;
@@ -475,12 +456,12 @@ class Mp4Muxer {
   // Opens the file first so an unwritable path fails before any encoding work.
   explicit Mp4Muxer(const std::filesystem::path& path) : path_(path) {
     if (const int r = avformat_alloc_output_context2(&format_, nullptr, "mp4", path.c_str()); r < 0 || !format_) {
-      throw RuntimeFailure(fmt::format("cannot create an mp4 muxer: {}", avError(r)));
+      throw RuntimeFailure(fmt::format("cannot create an mp4 muxer: {}", avErrorText(r)));
     }
     if (const int r = avio_open(&format_->pb, path.c_str(), AVIO_FLAG_WRITE); r < 0) {
       avformat_free_context(format_);  // the destructor does not run for a throwing constructor
       format_ = nullptr;
-      throw InputError(fmt::format("cannot write {}: {}", path.string(), avError(r)));
+      throw InputError(fmt::format("cannot write {}: {}", path.string(), avErrorText(r)));
     }
   }
   ~Mp4Muxer() {
@@ -496,14 +477,14 @@ class Mp4Muxer {
     stream_ = avformat_new_stream(format_, nullptr);
     if (stream_ == nullptr) throw RuntimeFailure("cannot add a video stream to the mp4 muxer");
     if (const int r = avcodec_parameters_from_context(stream_->codecpar, &ctx); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot copy codec parameters: {}", avError(r)));
+      throw RuntimeFailure(fmt::format("cannot copy codec parameters: {}", avErrorText(r)));
     }
     codec_time_base_ = ctx.time_base;
     stream_->time_base = ctx.time_base;
     stream_->avg_frame_rate = ctx.framerate;
     stream_->r_frame_rate = ctx.framerate;
     if (const int r = avformat_write_header(format_, nullptr); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot write the mp4 header of {}: {}", path_.string(), avError(r)));
+      throw RuntimeFailure(fmt::format("cannot write the mp4 header of {}: {}", path_.string(), avErrorText(r)));
     }
     packet_.reset(av_packet_alloc());
     if (!packet_) throw RuntimeFailure("out of memory allocating a packet");
@@ -512,7 +493,7 @@ class Mp4Muxer {
   void write(const EncodedPacket& in) {
     AVPacket* packet = packet_.get();
     if (const int r = av_new_packet(packet, static_cast<int>(in.bytes.size())); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot allocate a packet: {}", avError(r)));
+      throw RuntimeFailure(fmt::format("cannot allocate a packet: {}", avErrorText(r)));
     }
     std::memcpy(packet->data, in.bytes.data(), in.bytes.size());
     packet->pts = in.pts;
@@ -523,15 +504,15 @@ class Mp4Muxer {
     av_packet_rescale_ts(packet, codec_time_base_, stream_->time_base);
     const int r = av_write_frame(format_, packet);
     av_packet_unref(packet);
-    if (r < 0) throw RuntimeFailure(fmt::format("cannot write to {}: {}", path_.string(), avError(r)));
+    if (r < 0) throw RuntimeFailure(fmt::format("cannot write to {}: {}", path_.string(), avErrorText(r)));
   }
 
   void end() {
     if (const int r = av_write_trailer(format_); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot finish {}: {}", path_.string(), avError(r)));
+      throw RuntimeFailure(fmt::format("cannot finish {}: {}", path_.string(), avErrorText(r)));
     }
     if (const int r = avio_closep(&format_->pb); r < 0) {
-      throw RuntimeFailure(fmt::format("cannot close {}: {}", path_.string(), avError(r)));
+      throw RuntimeFailure(fmt::format("cannot close {}: {}", path_.string(), avErrorText(r)));
     }
   }
 

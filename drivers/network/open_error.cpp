@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <mutex>
 
+#include "drivers/ffmpeg/av_objects.h"
+
 extern "C" {
 #include <libavutil/error.h>
 #include <libavutil/log.h>
@@ -48,13 +50,11 @@ OpenErrorCapture::OpenErrorCapture() {
 OpenErrorCapture::~OpenErrorCapture() { --t_capture.depth; }
 
 std::string OpenErrorCapture::reason(int av_error_code) const {
-  char code_text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(av_error_code, code_text, sizeof(code_text));
+  const std::string code = ffmpeg::avErrorText(av_error_code);
   const std::string& logged = t_capture.lines;
-  if (logged.empty()) return code_text;
+  if (logged.empty()) return code;
   // The code's text adds nothing the log said, and for these failures it is usually a misleading
   // errno; it stays only when it is not one of the generic ones.
-  const std::string code(code_text);
   if (av_error_code == AVERROR(EIO) || av_error_code == AVERROR(ENOTTY) || logged.find(code) != std::string::npos) {
     return logged;
   }

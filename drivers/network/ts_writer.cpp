@@ -11,6 +11,7 @@ extern "C" {
 #include <libavutil/error.h>
 }
 
+#include "drivers/ffmpeg/av_objects.h"
 #include "drivers/network/open_error.h"
 #include "drivers/network/stream_url.h"
 #include "voca/core/error.h"
@@ -19,11 +20,7 @@ namespace voca::network {
 
 namespace {
 
-std::string avError(int code) {
-  std::array<char, AV_ERROR_MAX_STRING_SIZE> text{};
-  av_strerror(code, text.data(), text.size());
-  return text.data();
-}
+using ffmpeg::avErrorText;
 
 constexpr AVRational kTsClock{1, 90000};
 
@@ -60,7 +57,7 @@ StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height, st
     w.url += url.find('?') == std::string::npos ? "?pkt_size=1316" : "&pkt_size=1316";
   }
   if (const int r = avformat_alloc_output_context2(&w.format, nullptr, "mpegts", w.url.c_str()); r < 0) {
-    throw RuntimeFailure(fmt::format("cannot create an MPEG-TS muxer: {}", avError(r)));
+    throw RuntimeFailure(fmt::format("cannot create an MPEG-TS muxer: {}", avErrorText(r)));
   }
   w.packet = av_packet_alloc();
   if (w.packet == nullptr) {
@@ -104,7 +101,7 @@ StereoTsWriter::StereoTsWriter(const std::string& url, int width, int height, st
   av_dict_free(&options);
   if (r < 0) {
     w.close();
-    throw RuntimeFailure(fmt::format("cannot start the MPEG-TS stream to {}: {}", url, avError(r)));
+    throw RuntimeFailure(fmt::format("cannot start the MPEG-TS stream to {}: {}", url, avErrorText(r)));
   }
 }
 
@@ -139,7 +136,7 @@ void StereoTsWriter::write(int camera, std::span<const std::uint8_t> access_unit
   const int r = av_write_frame(w.format, pkt);
   pkt->data = nullptr;
   pkt->size = 0;
-  if (r < 0) throw RuntimeFailure(fmt::format("sending to {} failed: {}", w.url, avError(r)));
+  if (r < 0) throw RuntimeFailure(fmt::format("sending to {} failed: {}", w.url, avErrorText(r)));
   w.bytes += static_cast<std::int64_t>(access_unit.size());
 }
 
@@ -148,7 +145,7 @@ void StereoTsWriter::finish() {
   if (w.finished || w.format == nullptr) return;
   w.finished = true;
   if (const int r = av_write_trailer(w.format); r < 0) {
-    throw RuntimeFailure(fmt::format("ending the stream to {} failed: {}", w.url, avError(r)));
+    throw RuntimeFailure(fmt::format("ending the stream to {} failed: {}", w.url, avErrorText(r)));
   }
   avio_flush(w.format->pb);
 }

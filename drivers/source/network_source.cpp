@@ -16,6 +16,7 @@ extern "C" {
 #include <libavutil/error.h>
 }
 
+#include "drivers/ffmpeg/av_objects.h"
 #include "drivers/network/frame_stamp.h"
 #include "drivers/network/open_error.h"
 #include "drivers/network/stream_url.h"
@@ -25,11 +26,7 @@ namespace voca {
 
 namespace {
 
-std::string avError(int code) {
-  std::array<char, AV_ERROR_MAX_STRING_SIZE> text{};
-  av_strerror(code, text.data(), text.size());
-  return text.data();
-}
+using ffmpeg::avErrorText;
 
 std::int64_t nowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
@@ -315,7 +312,7 @@ bool NetworkStereoSource::next(EncodedStereoPacket& out) {
       } else if (r == AVERROR_EOF) {
         end_reason_ = "end of stream";
       } else {
-        end_reason_ = fmt::format("receiving failed: {}", avError(r));
+        end_reason_ = fmt::format("receiving failed: {}", avErrorText(r));
       }
       return false;
     }

@@ -13,7 +13,7 @@ namespace {
 // Enough packets to reach P-frames after the headers; keeps one input to milliseconds.
 constexpr int kMaxPackets = 48;
 
-void consume(voca::decode::DecodedFrame& frame, voca::IFrameBridge& bridge) {
+void consume(voca::decode::DecodedFrame& frame, voca::MotionPriorBridge& bridge) {
   frame.motion.flagOutliers();
   bool bridged = false;
   const voca::MotionField* prior = bridge.prior(frame.motion, 0, bridged);
@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     voca::decode::VideoDecoder decoder(stream, options, nullptr, "fuzz");
     voca::decode::Packet packet;
     voca::decode::DecodedFrame frame;
-    voca::IFrameBridge bridge(std::max(stream.width, 16), std::max(stream.height, 16));
+    voca::MotionPriorBridge bridge(std::max(stream.width, 16), std::max(stream.height, 16));
     for (int n = 0; n < kMaxPackets && demuxer.read(packet); ++n) {
       decoder.send(packet);
       while (decoder.receive(frame)) consume(frame, bridge);

@@ -124,7 +124,7 @@ class VoEstimator {
   void marginalize(int frame);
   void removeFrame(int frame);
   void frameStats(int frame, PoseEstimate& out) const;
-  backend::WindowState state() { return {window_, landmarks_, prior_}; }
+  backend::WindowStateRefs state() { return {window_, landmarks_, prior_}; }
 
   BackendConfig config_;
   backend::StereoResiduals model_;

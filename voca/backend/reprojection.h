@@ -44,8 +44,8 @@ struct ReprojectionJacobians {
 
 // A pose's rotation as a matrix, both ways, with its translation: computed once per pose and pass
 // over the window's residuals, because converting the quaternions of host, target and extrinsic
-// for every residual was a large share of the backend's time. Holds exactly what the conversion
-// per residual gave, so results do not change.
+// for every residual would be a large share of the backend's time. Holds exactly what converting per
+// residual gives, so the values are the same either way.
 struct PoseMatrices {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();      // T's rotation (frame -> parent)
   Eigen::Matrix3d R_inv = Eigen::Matrix3d::Identity();  // its transpose

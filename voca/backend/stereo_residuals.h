@@ -17,8 +17,8 @@
 namespace voca::backend {
 
 // A window slot's pose as the residual passes use it: T_w_c0 as matrices, and the rotation from
-// world axes into each camera of the rig, taken at the start of a pass (converting quaternions and
-// chaining rotations per residual was a large share of the backend's time).
+// world axes into each camera of the rig, taken once at the start of a pass because converting
+// quaternions and chaining rotations per residual would be a large share of the backend's time.
 struct FramePose {
   PoseMatrices T_w_c0;
   std::array<Eigen::Matrix3d, 2> R_cam_w;

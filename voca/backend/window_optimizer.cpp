@@ -55,8 +55,8 @@ constexpr double kPoseStepConvergedNorm = 1e-5;
 }
 
 // subtractProductTransposed on AVX: per column j of dst, the columns of A (rows 0-3 and 4-5) times
-// B(j, k), combined, then subtracted. A's columns are loaded once: reloading them per column of dst
-// (which the compiler must do, dst could alias A) made the kernel ~7 % slower.
+// B(j, k), combined, then subtracted. A's columns are loaded once, before the columns of dst: the
+// compiler cannot hoist the loads itself, since dst could alias A.
 [[gnu::target("avx")]] void subtractProductTransposedAvx(const Eigen::Matrix<double, 6, 3>& A,
                                                          const Eigen::Matrix<double, 6, 3>& B, double* dst,
                                                          std::ptrdiff_t stride) {
@@ -150,10 +150,10 @@ WindowOptimizer::WindowOptimizer(const BackendConfig& config, const StereoResidu
 // ---- single-frame pose step ---------------------------------------------------------------------
 
 // The passes over the residuals are [[gnu::flatten]]: GCC inlines neither reprojectLandmark nor the
-// camera model's project() behind GenericCamera's std::visit, and as calls (Jacobians passed through
-// memory) they took 13 % of the bench's samples; inlined, the backend takes ~7 % less time. Same
-// arithmetic in the same order, so the same values.
-[[gnu::flatten]] int WindowOptimizer::optimizePose(const WindowState& state, int frame) const {
+// camera model's project() behind GenericCamera's std::visit on its own, and as calls they pass the
+// Jacobians through memory for every residual, a large share of the backend's time. Same arithmetic
+// in the same order, so the same values.
+[[gnu::flatten]] int WindowOptimizer::optimizePose(const WindowStateRefs& state, int frame) const {
   const LandmarkStore& landmarks = state.landmarks;
   const std::uint32_t bits = frameBits(frame);
   WindowPoses poses = model_.windowPoses(state.window);
@@ -199,15 +199,15 @@ double WindowOptimizer::residualCost(bool projected, double e) const {
   return model_.cost(projected ? e : 10.0 * config_.outlier_threshold_px);
 }
 
-double WindowOptimizer::totalCost(const WindowState& state, std::size_t count) const {
+double WindowOptimizer::totalCost(const WindowStateRefs& state, std::size_t count) const {
   double total = 0.0;
   for (std::size_t k = count; k-- > 0;) total += lin_[k].cost;
   return total + state.prior.cost(state.window);
 }
 
-double WindowOptimizer::cost(const WindowState& state) const { return cost(state, nullptr); }
+double WindowOptimizer::cost(const WindowStateRefs& state) const { return cost(state, nullptr); }
 
-[[gnu::flatten]] double WindowOptimizer::cost(const WindowState& state, std::uint32_t* outliers) const {
+[[gnu::flatten]] double WindowOptimizer::cost(const WindowStateRefs& state, std::uint32_t* outliers) const {
   const LandmarkStore& landmarks = state.landmarks;
   const WindowPoses poses = model_.windowPoses(state.window);
   double total = 0.0;
@@ -238,7 +238,7 @@ double WindowOptimizer::cost(const WindowState& state) const { return cost(state
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
-[[gnu::flatten]] double WindowOptimizer::linearize(const WindowState& state, const std::vector<int>* only_landmarks,
+[[gnu::flatten]] double WindowOptimizer::linearize(const WindowStateRefs& state, const std::vector<int>* only_landmarks,
                                                    bool full_hessian) {
   WindowMatrix& H = H_;
   WindowVector& b = b_;
@@ -347,7 +347,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
   return totalCost(state, list.size());
 }
 
-void WindowOptimizer::backup(const WindowState& state) {
+void WindowOptimizer::backup(const WindowStateRefs& state) {
   for (int f = 0; f < kMaxWindowFrames; ++f) state.window[f].T_w_c_backup = state.window[f].T_w_c;
   for (const int i : state.landmarks.alive()) {
     Landmark& lm = state.landmarks[i];
@@ -357,7 +357,7 @@ void WindowOptimizer::backup(const WindowState& state) {
   }
 }
 
-void WindowOptimizer::restore(const WindowState& state) {
+void WindowOptimizer::restore(const WindowStateRefs& state) {
   for (int f = 0; f < kMaxWindowFrames; ++f) state.window[f].T_w_c = state.window[f].T_w_c_backup;
   for (const int i : state.landmarks.alive()) {
     Landmark& lm = state.landmarks[i];
@@ -367,7 +367,7 @@ void WindowOptimizer::restore(const WindowState& state) {
   }
 }
 
-void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVector& dx) {
+void WindowOptimizer::applyIncrement(const WindowStateRefs& state, const WindowVector& dx) {
   for (int f = 0; f < kMaxWindowFrames; ++f) {
     if (state.window[f].active) applyPoseIncrement(state.window[f].T_w_c, dx.segment<6>(6 * f));
   }
@@ -387,12 +387,12 @@ void WindowOptimizer::applyIncrement(const WindowState& state, const WindowVecto
   }
 }
 
-double WindowOptimizer::linearizeCounted(const WindowState& state) {
+double WindowOptimizer::linearizeCounted(const WindowStateRefs& state) {
   ++linearizations_;
   return linearize(state, nullptr, false);
 }
 
-int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool filter) {
+int WindowOptimizer::optimize(const WindowStateRefs& state, int max_iterations, bool filter) {
   linearizations_ = 0;
   cost_passes_ = 0;
   double lambda = config_.lm_lambda_initial;
@@ -517,9 +517,10 @@ int WindowOptimizer::optimize(const WindowState& state, int max_iterations, bool
   return it;
 }
 
-int WindowOptimizer::filterOutliers(const WindowState& state) const { return filterOutliers(state, nullptr); }
+int WindowOptimizer::filterOutliers(const WindowStateRefs& state) const { return filterOutliers(state, nullptr); }
 
-[[gnu::flatten]] int WindowOptimizer::filterOutliers(const WindowState& state, const std::uint32_t* precomputed) const {
+[[gnu::flatten]] int WindowOptimizer::filterOutliers(const WindowStateRefs& state,
+                                                     const std::uint32_t* precomputed) const {
   LandmarkStore& landmarks = state.landmarks;
   int removed = 0;
   const WindowPoses poses = model_.windowPoses(state.window);
@@ -560,7 +561,7 @@ int WindowOptimizer::filterOutliers(const WindowState& state) const { return fil
 
 // ---- marginalisation ----------------------------------------------------------------------------
 
-void WindowOptimizer::linearizeForMarginalization(const WindowState& state, const std::vector<int>& landmarks) {
+void WindowOptimizer::linearizeForMarginalization(const WindowStateRefs& state, const std::vector<int>& landmarks) {
   // Information on the window from the prior and the marginalised landmarks, landmarks eliminated.
   linearize(state, &landmarks, true);
   for (std::size_t k = 0; k < landmarks.size(); ++k) {

@@ -19,21 +19,21 @@
 
 namespace voca::backend {
 
-// The state the optimiser works on, owned by the estimator.
-struct WindowState {
+// References to the state the optimiser works on, which the estimator owns.
+struct WindowStateRefs {
   Window& window;
   LandmarkStore& landmarks;
   MarginalizationPrior& prior;
 };
 
 // dst(i, j) += sign (A B^T)(i, j) for i >= j, dst a 6x6 block, A and B 6xK: the lower triangle of a
-// symmetric block. The diagonal blocks of the reduced camera system (whose LDLT reads nothing else;
-// the upper half was a third of the block products formed per landmark) and the host-host
+// symmetric block. The diagonal blocks of the reduced camera system (whose LDLT reads nothing else,
+// so forming the upper half would add a third to the block products per landmark) and the host-host
 // information of a frame pair (mirrored once per pair, not formed per residual). It goes in column
 // pairs from the diagonal down, (0,1), (2,3), (4,5), so every column is whole SSE2 packets of two
 // rows; the pairs also reach the three entries just above the diagonal (0,1), (2,3), (4,5), which
 // are left changed. Eigen's packet product sums ((a0 b0 + a1 b1) + a2 b2) as the full block product
-// does, so the entries are the same bit for bit. Always inlined: GCC kept it as a call in the Schur
+// does, so the entries are the same bit for bit. Always inlined: GCC would leave it a call in the Schur
 // loop, once per landmark and frame.
 enum class Accumulate { kAdd, kSubtract };
 template <Accumulate kOp, typename Dst, typename Product>
@@ -87,13 +87,13 @@ class WindowOptimizer {
 
   // Total cost: robust reprojection cost (an observation that cannot be projected counts like an
   // error of 10x the outlier threshold) plus the prior's.
-  double cost(const WindowState& state) const;
+  double cost(const WindowStateRefs& state) const;
   // The same total as the LM linearisation computes it along the way (what steps are judged by);
   // equals cost() exactly. Overwrites the optimiser's linearisation.
-  double linearizedCost(const WindowState& state) { return linearize(state, nullptr, false); }
+  double linearizedCost(const WindowStateRefs& state) { return linearize(state, nullptr, false); }
   // Up to max_iterations LM iterations; with `filter`, outliers are removed at filter_iteration (or
   // on convergence, whichever comes first). Returns the iterations run.
-  int optimize(const WindowState& state, int max_iterations, bool filter);
+  int optimize(const WindowStateRefs& state, int max_iterations, bool filter);
   // Linearisations (passes over the residuals with Jacobians) of the last optimize(): most of its time.
   int linearizations() const { return linearizations_; }
   // Cost passes (residuals without Jacobians) of the last optimize(), each judging a step expected to
@@ -102,20 +102,20 @@ class WindowOptimizer {
   // Removes observations off by more than the outlier threshold; landmarks whose host view is an
   // outlier, that keep too few views or whose depth left the valid range die. Returns the number of
   // observations removed (those of dead landmarks included).
-  int filterOutliers(const WindowState& state) const;
+  int filterOutliers(const WindowStateRefs& state) const;
   // cost(), and with `outliers` (room for every live landmark) the filter's outlier bits of each
   // landmark by its position in alive(), from the same residuals: what optimize() does before its
   // filter, so that the filter needs no residual pass of its own.
-  double cost(const WindowState& state, std::uint32_t* outliers) const;
+  double cost(const WindowStateRefs& state, std::uint32_t* outliers) const;
   // filterOutliers, with the outlier bits from cost(state, outliers) at this same state when not null.
-  int filterOutliers(const WindowState& state, const std::uint32_t* outliers) const;
+  int filterOutliers(const WindowStateRefs& state, const std::uint32_t* outliers) const;
   // Gauss-Newton on one frame's pose alone, landmarks and the other poses fixed. Returns the steps
   // taken (at most pose_only_iterations; fewer once a step is below the convergence bound).
-  int optimizePose(const WindowState& state, int frame) const;
+  int optimizePose(const WindowStateRefs& state, int frame) const;
 
   // Marginalisation: the normal equations of the prior and the given landmarks' residuals, with
   // those landmarks eliminated. The result stays in hessian() and gradient() for the prior.
-  void linearizeForMarginalization(const WindowState& state, const std::vector<int>& landmarks);
+  void linearizeForMarginalization(const WindowStateRefs& state, const std::vector<int>& landmarks);
   WindowMatrix& hessian() { return H_; }
   const WindowVector& gradient() const { return b_; }
   WindowVector& gradient() { return b_; }
@@ -143,16 +143,16 @@ class WindowOptimizer {
   // full_hessian, pose blocks above the diagonal are left out (what the LM solve reads). Returns the
   // total cost at this point, equal to cost() (same terms, same order): LM's acceptance test of a
   // step then needs no pass of its own when the next iteration linearises there anyway.
-  double linearize(const WindowState& state, const std::vector<int>* only_landmarks, bool full_hessian);
+  double linearize(const WindowStateRefs& state, const std::vector<int>* only_landmarks, bool full_hessian);
   // Robust cost of one residual whose norm is e, or of one that cannot be projected.
   double residualCost(bool projected, double e) const;
   // The landmarks' costs summed in the one order cost() and linearize() share, plus the prior's.
-  double totalCost(const WindowState& state, std::size_t count) const;
+  double totalCost(const WindowStateRefs& state, std::size_t count) const;
   // linearize() of the whole window, counted in linearizations_.
-  double linearizeCounted(const WindowState& state);
-  static void backup(const WindowState& state);
-  static void restore(const WindowState& state);
-  void applyIncrement(const WindowState& state, const WindowVector& dx);
+  double linearizeCounted(const WindowStateRefs& state);
+  static void backup(const WindowStateRefs& state);
+  static void restore(const WindowStateRefs& state);
+  void applyIncrement(const WindowStateRefs& state, const WindowVector& dx);
 
   BackendConfig config_;
   StereoResiduals model_;

@@ -1,5 +1,8 @@
 #pragma once
 // GenericCamera: one of the camera models chosen at run time from a calibration file.
+// The models, one header each, have analytic Jacobians, take their parameters in the order and
+// under the names of Basalt's calibration files, and are templated on the scalar: the frontend
+// projects in float, the backend in double.
 
 #include <algorithm>
 #include <array>
@@ -14,7 +17,12 @@
 #include <variant>
 #include <vector>
 
-#include "voca/camera/camera_models.h"
+#include "voca/camera/camera_math.h"
+#include "voca/camera/double_sphere_camera.h"
+#include "voca/camera/eucm_camera.h"
+#include "voca/camera/kb4_camera.h"
+#include "voca/camera/pinhole_camera.h"
+#include "voca/camera/radtan8_camera.h"
 #include "voca/core/error.h"
 
 namespace voca {

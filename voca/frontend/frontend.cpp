@@ -28,9 +28,9 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
   if (max_width <= 0 || max_height <= 0) throw InputError("frontend capacity: unknown image size");
 
   for (std::size_t c = 0; c < 2; ++c) {
-    cameras_[c] = CameraTracks(max_points_, TemporalTracker::kScratchSlots, max_width, max_height, num_levels,
-                               config_.presmooth != InputScope::kOff);
-    temporal_[c] = TemporalTracker(config_, klt, max_points_, max_width, max_height, cameras_[c]);
+    camera_tracks_[c] = CameraTracks(max_points_, TemporalTracker::kScratchSlots, max_width, max_height, num_levels,
+                                     config_.presmooth != InputScope::kOff);
+    temporal_[c] = TemporalTracker(config_, klt, max_points_, max_width, max_height, camera_tracks_[c]);
   }
   stereo_ = StereoMatcher(config_, rig, klt, max_points_, max_width, max_height);
   if (config_.thin_when_full_px > 0.0)
@@ -39,7 +39,7 @@ KltFrontend::KltFrontend(const FrontendConfig& config, const StereoRig& rig, con
 
 void KltFrontend::reset() {
   for (std::size_t c = 0; c < 2; ++c) {
-    cameras_[c].clear();
+    camera_tracks_[c].clear();
     temporal_[c].reset();
   }
   have_previous_ = false;
@@ -68,26 +68,26 @@ int KltFrontend::beginFrame(const DecodedStereoFrame& input, FrontendStats& stat
   retry_flow_ = appliesTo(config_.retry_previous_flow, input.decoded);
   // Both items track left points: its pyramid must exist before either starts.
   startCamera(0, input);
-  const std::size_t left = cameras_[0].size(), right = cameras_[1].size();
+  const std::size_t left = camera_tracks_[0].size(), right = camera_tracks_[1].size();
   left_split_ = std::min(left, (left + right) / 2);
   return kWorkItems;
 }
 
 void KltFrontend::startCamera(int camera, const DecodedStereoFrame& input) {
   const auto c = static_cast<std::size_t>(camera);
-  cameras_[c].advance(input.images[c].view(), presmooth_);
+  camera_tracks_[c].advance(input.images[c].view(), presmooth_);
   temporal_[c].begin(input.has_motion ? &input.motion[c] : nullptr, input.frames_missing_before, have_previous_,
-                     retry_flow_, cameras_[c]);
+                     retry_flow_, camera_tracks_[c]);
 }
 
 void KltFrontend::runItem(int item, const DecodedStereoFrame& input) {
   assert(item >= 0 && item < kWorkItems);
-  CameraTracks& left = cameras_[0];
+  CameraTracks& left = camera_tracks_[0];
   if (item == 0) {
     temporal_[0].trackShare(0, 0, left_split_, left);
     return;
   }
-  CameraTracks& right = cameras_[1];
+  CameraTracks& right = camera_tracks_[1];
   startCamera(1, input);
   temporal_[1].trackShare(0, 0, right.size(), right);
   temporal_[1].finish(right);
@@ -95,7 +95,7 @@ void KltFrontend::runItem(int item, const DecodedStereoFrame& input) {
 }
 
 void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& out, FrontendStats& stats) {
-  temporal_[0].finish(cameras_[0]);
+  temporal_[0].finish(camera_tracks_[0]);
   for (std::size_t c = 0; c < 2; ++c) {
     const TemporalTracker& temporal = temporal_[c];
     stats.temporal[c] = temporal.stats();
@@ -105,8 +105,8 @@ void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& 
     stats.guess_dist_prior_px.insert(stats.guess_dist_prior_px.end(), temporal.guessDistPrior().begin(),
                                      temporal.guessDistPrior().end());
   }
-  CameraTracks& left = cameras_[0];
-  CameraTracks& right = cameras_[1];
+  CameraTracks& left = camera_tracks_[0];
+  CameraTracks& right = camera_tracks_[1];
   // Every track survived and the capacity is full: no point could be detected. Crowded tracks give
   // way (thin_when_full_px).
   if (have_previous_ && config_.thin_when_full_px > 0.0 && static_cast<int>(left.size()) >= max_points_)
@@ -123,7 +123,7 @@ void KltFrontend::endFrame(const DecodedStereoFrame& input, TrackedStereoFrame& 
   out.frame_index = input.frame_index;
   out.frames_missing_before = input.frames_missing_before;
   for (std::size_t c = 0; c < 2; ++c) {
-    const CameraTracks& camera = cameras_[c];
+    const CameraTracks& camera = camera_tracks_[c];
     auto& observations = out.observations[c];
     for (std::size_t i = 0; i < camera.size(); ++i) observations.push_back({camera.ids[i], camera.points[i]});
   }

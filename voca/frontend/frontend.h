@@ -81,7 +81,7 @@ class KltFrontend {
   FrontendConfig config_;
   int max_points_ = 0;
   int width_ = 0, height_ = 0;
-  std::array<CameraTracks, 2> cameras_;
+  std::array<CameraTracks, 2> camera_tracks_;
   std::array<TemporalTracker, 2> temporal_;
   StereoMatcher stereo_;
   TrackThinner thinner_;

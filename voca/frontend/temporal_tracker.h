@@ -96,9 +96,9 @@ class TemporalTracker {
   FrontendConfig config_;
   RoundTripTracker klt_;
   int num_levels_ = 0;
-  int prior_levels_ = 0;     // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
-  float round_trip2_ = 0.f;  // max_recovered_dist2_px2
-  IFrameBridge bridge_;      // chooses the motion prior, carrying P-frame vectors over I-frames
+  int prior_levels_ = 0;      // levels a motion-vector guess is tracked on (prior_pyramid_levels + 1)
+  float round_trip2_ = 0.f;   // max_recovered_dist2_px2
+  MotionPriorBridge bridge_;  // chooses the motion prior, carrying P-frame vectors over I-frames
   // retry_previous_flow: the median displacement of the last step's kept tracks (zero before any),
   // and whether a step has measured it since the start or the last reset(). Until one has, a retry
   // starts from the whole image's shift (shift_search_) instead.

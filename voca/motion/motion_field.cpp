@@ -247,7 +247,7 @@ int MotionField::flagOutliers(const OutlierParams& params) {
   return flagged;
 }
 
-const MotionField* IFrameBridge::prior(const MotionField& field, int frames_missing_before, bool& bridged) {
+const MotionField* MotionPriorBridge::prior(const MotionField& field, int frames_missing_before, bool& bridged) {
   if (field.hasVectors()) {
     if (enabled_ || flag_outliers_) {
       last_.copyFrom(field);

@@ -142,13 +142,13 @@ class MotionField {
 // The motion prior of each frame of one camera's stream, carried over I-frames (the paper's
 // "Bridging I-frames"); the one place that decides which vectors predict a frame's motion. Feed
 // every frame's field in stream order. No allocation after construction.
-class IFrameBridge {
+class MotionPriorBridge {
  public:
-  IFrameBridge() = default;
+  MotionPriorBridge() = default;
   // enabled = false: a frame's own vectors or none, nothing is carried over. flag_outliers: every
   // field handed out has its blocks flagged by MotionField::flagOutliers (on a copy; the input stays
   // untouched), so a consumer can distrust vectors that disagree with their neighbourhood.
-  IFrameBridge(int max_width, int max_height, bool enabled = true, bool flag_outliers = false)
+  MotionPriorBridge(int max_width, int max_height, bool enabled = true, bool flag_outliers = false)
       : last_(max_width, max_height), enabled_(enabled), flag_outliers_(flag_outliers) {}
 
   // The field whose vectors give this frame's motion from the previous frame the tracker saw:
