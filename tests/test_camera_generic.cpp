@@ -49,7 +49,9 @@ TEST_CASE("fromParams builds every model and dispatches to it") {
       {"ds", {349.756, 348.725, 365.894, 249.330, -0.241, 0.567}},
       {"eucm", {460.765, 459.405, 365.894, 249.335, 0.590, 1.127}},
   };
-  for (const auto& [name, params] : cases) {
+  for (const auto& model_case : cases) {
+    const std::string& name = model_case.first;
+    const auto& params = model_case.second;
     CAPTURE(name);
     const auto camera = GenericCamera<double>::fromParams(name, params);
     CHECK(camera.modelName() == name);
