@@ -572,4 +572,6 @@ bool VideoDecoder::receive(DecodedFrame& out) {
   return true;
 }
 
+void silenceDamageMessages() { av_log_set_level(AV_LOG_FATAL); }
+
 }  // namespace voca::decode

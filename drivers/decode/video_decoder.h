@@ -91,4 +91,9 @@ class VideoDecoder {
   std::unique_ptr<Impl> impl_;
 };
 
+// Turns off libavcodec's messages about damaged data ("error while decoding MB ..."), several per
+// damaged picture, for the rest of the process: for runs that damage streams on purpose and count
+// the damaged frames instead. Only fatal messages remain.
+void silenceDamageMessages();
+
 }  // namespace voca::decode
