@@ -227,8 +227,14 @@ void DecodeStage::Impl::decode(FrameSlot& slot, Emitter& out) {
   p.reset(&slot);
   for (std::size_t c = 0; c < 2; ++c) p.pts[c] = slot.encoded.packets[c].pts;
   for (int c = 0; c < 2; ++c) {
+    const decode::Packet& packet = slot.encoded.packets[static_cast<std::size_t>(c)];
+    decode::VideoDecoder& decoder = *d.decoders[static_cast<std::size_t>(c)];
     try {
-      d.decoders[static_cast<std::size_t>(c)]->send(slot.encoded.packets[static_cast<std::size_t>(c)]);
+      if (d.options.decoder.strict) {
+        decoder.send(packet);  // throws, naming the packet
+      } else if (!decoder.trySend(packet) && !p.resolved[static_cast<std::size_t>(c)]) {
+        d.markDamaged(p, c, "the decoder refused its packet as corrupt");
+      }
     } catch (const InputError& e) {
       // Non-strict decoding reports bad data per frame instead of stopping (strict rethrows).
       if (d.options.decoder.strict) throw;
