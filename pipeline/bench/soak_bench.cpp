@@ -37,8 +37,8 @@ namespace {
 constexpr int kLoopKeyframeInterval = 20;
 constexpr std::int64_t kLoopBitrateBps = 500'000;
 
-// The built-in loop: a 3 s moving sequence, rendered with one sample per pixel (seconds instead of
-// minutes; the soak measures the pipeline, not the tracker's accuracy).
+// The built-in loop: a 3 s moving sequence, rendered with one sample per pixel (faster; the soak
+// measures the pipeline, not the tracker's accuracy).
 harness::BenchSequenceSpec builtinLoopSpec() {
   harness::BenchSequenceSpec spec;
   spec.camera = "euroc";
@@ -88,27 +88,27 @@ class SoakSink final : public FrameSink {
     if (!baseline_frame_ && frame >= options_.warmup) {
       baseline_frame_ = frame;
       baseline_allocations_ = platform::operatorNewCalls();
-      rss_at_warmup_ = platform::residentBytes();
-      rss_peak_after_warmup_ = rss_at_warmup_;
+      at_warmup_ = platform::residentMemory();
+      rss_peak_after_warmup_ = at_warmup_.bytes;
     }
     if (baseline_frame_) {
       last_frame_ = frame;
       last_allocations_ = platform::operatorNewCalls();
     }
     if (frame >= next_sample_) {
-      const std::int64_t rss = platform::residentBytes();
-      samples_.push_back({frame, rss});
-      if (baseline_frame_) rss_peak_after_warmup_ = std::max(rss_peak_after_warmup_, rss);
+      const platform::ResidentMemory rss = platform::residentMemory();
+      samples_.push_back({frame, rss.bytes, rss.anonymousBytes()});
+      if (baseline_frame_) rss_peak_after_warmup_ = std::max(rss_peak_after_warmup_, rss.bytes);
       next_sample_ = (frame / options_.sample_interval + 1) * options_.sample_interval;
-      if (options_.progress) showProgress(slot, frame, rss);
+      if (options_.progress) showProgress(slot, frame, rss.bytes);
     }
     last_written_ns_.store(platform::monotonicNs(), std::memory_order_relaxed);
   }
 
   void finish() override {
-    rss_at_end_ = platform::residentBytes();
-    samples_.push_back({last_frame_.value_or(-1), rss_at_end_});
-    if (baseline_frame_) rss_peak_after_warmup_ = std::max(rss_peak_after_warmup_, rss_at_end_);
+    at_end_ = platform::residentMemory();
+    samples_.push_back({last_frame_.value_or(-1), at_end_.bytes, at_end_.anonymousBytes()});
+    if (baseline_frame_) rss_peak_after_warmup_ = std::max(rss_peak_after_warmup_, at_end_.bytes);
     line_.end();
   }
 
@@ -117,10 +117,11 @@ class SoakSink final : public FrameSink {
 
   void fill(SoakReport& report) const {
     report.rss = samples_;
-    report.rss_at_warmup = rss_at_warmup_;
-    report.rss_at_end = rss_at_end_;
+    report.rss_at_warmup = at_warmup_.bytes;
+    report.rss_at_end = at_end_.bytes;
     report.rss_peak_after_warmup = rss_peak_after_warmup_;
-    report.rss_growth = baseline_frame_ ? rss_at_end_ - rss_at_warmup_ : 0;
+    report.rss_growth = baseline_frame_ ? at_end_.bytes - at_warmup_.bytes : 0;
+    report.anonymous_growth = baseline_frame_ ? at_end_.anonymousBytes() - at_warmup_.anonymousBytes() : 0;
     if (baseline_frame_) {
       report.steady_frames = *last_frame_ - *baseline_frame_;
       report.steady_allocations = last_allocations_ - baseline_allocations_;
@@ -138,7 +139,7 @@ class SoakSink final : public FrameSink {
           "soak: frame {}/{}: {} written, {} lost at the source, {} dropped, {} damaged; RSS {:.1f} MiB "
           "({:+.3f} since warm-up); {} allocations since warm-up",
           frame, options_.frames, written_, lost.frames_lost, slot.dropped_so_far, slot.damaged_so_far, mib(rss),
-          mib(rss - rss_at_warmup_), platform::operatorNewCalls() - baseline_allocations_);
+          mib(rss - at_warmup_.bytes), platform::operatorNewCalls() - baseline_allocations_);
     } else {
       line_.update(
           "soak: frame {}/{} (warm-up): {} written, {} lost at the source, {} dropped, {} damaged; RSS "
@@ -155,7 +156,8 @@ class SoakSink final : public FrameSink {
   std::int64_t written_ = 0;
   std::optional<std::int64_t> baseline_frame_, last_frame_;
   std::int64_t baseline_allocations_ = 0, last_allocations_ = 0;
-  std::int64_t rss_at_warmup_ = 0, rss_at_end_ = 0, rss_peak_after_warmup_ = 0;
+  platform::ResidentMemory at_warmup_, at_end_;
+  std::int64_t rss_peak_after_warmup_ = 0;
   std::atomic<std::int64_t> last_written_ns_;
 };
 
@@ -356,7 +358,9 @@ SoakReport runSoak(const SoakOptions& options) {
 
 void writeSoakJson(const SoakReport& r, const std::filesystem::path& file) {
   nlohmann::json rss = nlohmann::json::array();
-  for (const RssSample& s : r.rss) rss.push_back({{"frame", s.frame}, {"bytes", s.bytes}});
+  for (const RssSample& s : r.rss) {
+    rss.push_back({{"frame", s.frame}, {"bytes", s.bytes}, {"anonymous_bytes", s.anonymous_bytes}});
+  }
   nlohmann::json stages = nlohmann::json::array();
   for (const SoakStage& s : r.stages) {
     stages.push_back(
@@ -383,6 +387,7 @@ void writeSoakJson(const SoakReport& r, const std::filesystem::path& file) {
       {"rss_at_end_bytes", r.rss_at_end},
       {"rss_peak_after_warmup_bytes", r.rss_peak_after_warmup},
       {"rss_growth_bytes", r.rss_growth},
+      {"rss_anonymous_growth_bytes", r.anonymous_growth},
       {"rss_growth_limit_bytes", kSoakMaxRssGrowthBytes},
       {"rss", rss},
       {"steady_frames", r.steady_frames},

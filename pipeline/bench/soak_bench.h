@@ -42,6 +42,7 @@ inline constexpr std::int64_t kSoakMaxRssGrowthBytes = 1 << 20;  // growth after
 struct RssSample {
   std::int64_t frame = 0;  // the frame index written when it was taken
   std::int64_t bytes = 0;
+  std::int64_t anonymous_bytes = 0;  // heap, stacks: what a leak grows (the rest maps files, such as code)
 };
 
 struct SoakStage {
@@ -72,7 +73,8 @@ struct SoakReport {
   // Memory.
   std::vector<RssSample> rss;  // every sample_interval frames from the start, and one at the end
   std::int64_t rss_at_warmup = 0, rss_at_end = 0, rss_peak_after_warmup = 0;
-  std::int64_t rss_growth = 0;          // rss_at_end - rss_at_warmup
+  std::int64_t rss_growth = 0;          // rss_at_end - rss_at_warmup: the target
+  std::int64_t anonymous_growth = 0;    // of which anonymous memory (heap, stacks); the rest is file pages
   std::int64_t steady_frames = 0;       // frame indices from the warm-up's end to the last frame written
   std::int64_t steady_allocations = 0;  // operator new calls, process-wide, over those frames
   double allocations_per_frame = 0.0;

@@ -17,7 +17,7 @@ struct BenchSequenceSpec {
   std::string motion = "aggressive";
   int seconds = 40;
   std::int64_t bitrate_bps = 500'000;
-  int supersample = 3;        // `voca synth --supersample`: 1 renders ~9x faster with rougher edges
+  int supersample = 3;        // `voca synth --supersample`: 1 renders faster, with rougher edges
   int keyframe_interval = 0;  // frames between keyframes; 0: the paper's encoding (keyint 1000)
 };
 

@@ -30,9 +30,10 @@ void printReport(const pipeline::SoakReport& r, const pipeline::SoakOptions& opt
              r.tracker_resets);
   fmt::print(
       "RSS: {:.2f} MiB at frame {} (end of the warm-up), {:.2f} MiB at the end, peak {:.2f} MiB after the "
-      "warm-up: growth {:+.3f} MiB (target < {:.0f} MiB)\n",
+      "warm-up: growth {:+.3f} MiB (target < {:.0f} MiB), of which anonymous memory {:+.3f} MiB (the rest: pages "
+      "of the program and its libraries first used)\n",
       mib(r.rss_at_warmup), options.warmup, mib(r.rss_at_end), mib(r.rss_peak_after_warmup), mib(r.rss_growth),
-      mib(pipeline::kSoakMaxRssGrowthBytes));
+      mib(pipeline::kSoakMaxRssGrowthBytes), mib(r.anonymous_growth));
   fmt::print(
       "allocations (operator new, whole process) over the steady state: {} in {} frames, {:.4f} per frame "
       "(target 0)\n",
