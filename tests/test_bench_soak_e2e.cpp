@@ -16,7 +16,7 @@ using voca::test::ScratchDir;
 TEST_CASE("voca bench soak: every frame accounted for, no allocation per frame, RSS flat, drops and damage seen") {
   const ScratchDir dir("soak");
   const std::filesystem::path report = dir / "soak.json";
-  // 3000 frames at 8x real time (150 s of 20 Hz video): about 40 s here, rendering included. Rates
+  // 3000 frames at 8x real time (150 s of 20 Hz video): about a minute here, rendering included. Rates
   // high enough that drops and damage happen within the run for this seed.
   const voca::test::CommandOutput run = runVocaOutput(
       "bench soak --frames 3000 --warmup 1000 --speed 8 --drop-rate 0.01 --damage-rate 0.01 --seed 3 "
