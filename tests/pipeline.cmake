@@ -23,3 +23,9 @@ voca_add_test(test_decode_stage SOURCES test_decode_stage.cpp
 voca_add_test(test_overlay SOURCES test_overlay.cpp LIBS voca_pipeline_sinks LABELS asan)
 # The statistics sink's guess-distance histogram on known samples.
 voca_add_test(test_statistics SOURCES test_statistics.cpp LIBS voca_pipeline_sinks)
+# `voca bench soak` at CI's size through the binary (issue 61): the live pipeline on a looping source
+# with drops and damaged packets allocates nothing per frame, holds its RSS and accounts for every
+# frame; bad options are refused.
+voca_add_test(test_bench_soak_e2e SOURCES test_bench_soak_e2e.cpp LIBS nlohmann_json::nlohmann_json LABELS e2e
+              TIMEOUT 300)
+add_dependencies(test_bench_soak_e2e voca)

@@ -160,7 +160,11 @@ struct VideoDecoder::Impl {
   CodecContextPtr openVaapi();
   CodecContextPtr openV4l2m2m() const;
   void open(DecoderKind kind);
-  void checkSend(int rc, const AVPacket* pkt, std::int64_t index);
+  // True when the decoder refused the packet's data as corrupt; throws for any other failure.
+  bool refused(int rc, const AVPacket* pkt, std::int64_t index) const;
+  // Feeds pkt (nullptr: the end) to the motion parse and the pixel decoder: 0, or the corrupt-data
+  // code of the one that refused it.
+  int feed(const AVPacket* pkt, std::int64_t index);
   void drainMotion();
   void allocMotionSlots();
   void usePixel(CodecContextPtr ctx) {
@@ -169,7 +173,8 @@ struct VideoDecoder::Impl {
     pixel = std::move(decoder);
   }
   const AVFrame* takeMotionFor(const AVFrame& pixels);
-  void fail(int rc, const std::string& what) const;
+  [[noreturn]] void fail(int rc, const std::string& what) const;
+  int refusal = 0;  // the code of the last packet trySend() saw refused
   void convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out);
   void refuseUnusableStructure(const AVFrame& parsed);
 };
@@ -233,8 +238,15 @@ void VideoDecoder::Impl::refuseUnusableStructure(const AVFrame& parsed) {
   }
 }
 
+namespace {
+
+// The packet's data, not the decoder, is at fault.
+bool isCorruptData(int rc) { return rc == AVERROR_INVALIDDATA || rc == AVERROR_BUG || rc == AVERROR_PATCHWELCOME; }
+
+}  // namespace
+
 void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
-  if (rc == AVERROR_INVALIDDATA || rc == AVERROR_BUG || rc == AVERROR_PATCHWELCOME) {
+  if (isCorruptData(rc)) {
     throw InputError(source + ": corrupt bitstream " + what + " (" + avErrorText(rc) + ")");
   }
   throw RuntimeFailure(source + ": decoder failure " + what + " (" + avErrorText(rc) + ")");
@@ -402,13 +414,25 @@ DecoderKind VideoDecoder::kind() const { return impl_->choice.kind; }
 const std::string& VideoDecoder::description() const { return impl_->choice.description; }
 const StreamInfo& VideoDecoder::stream() const { return impl_->stream; }
 
-void VideoDecoder::Impl::checkSend(int rc, const AVPacket* pkt, std::int64_t index) {
-  if (rc == 0 || rc == AVERROR_EOF) return;
+bool VideoDecoder::Impl::refused(int rc, const AVPacket* pkt, std::int64_t index) const {
+  if (rc == 0 || rc == AVERROR_EOF) return false;
   if (rc == AVERROR(EAGAIN)) {
     throw RuntimeFailure(source + ": decoder refused packet " + std::to_string(index) +
                          " (frames were not drained with receive())");
   }
+  if (isCorruptData(rc)) return true;
   fail(rc, pkt == nullptr ? std::string("while flushing") : "in packet " + std::to_string(index));
+}
+
+int VideoDecoder::Impl::feed(const AVPacket* pkt, std::int64_t index) {
+  if (motion) {
+    drainMotion();
+    const int rc = avcodec_send_packet(motion.get(), pkt);
+    if (refused(rc, pkt, index)) return rc;
+    drainMotion();
+  }
+  const int rc = pixel->send(pkt);
+  return refused(rc, pkt, index) ? rc : 0;
 }
 
 void VideoDecoder::Impl::drainMotion() {
@@ -460,9 +484,13 @@ const AVFrame* VideoDecoder::Impl::takeMotionFor(const AVFrame& pixels) {
 }
 
 void VideoDecoder::send(const Packet& packet) {
+  if (!trySend(packet)) impl_->fail(impl_->refusal, "in packet " + std::to_string(packet.index));
+}
+
+bool VideoDecoder::trySend(const Packet& packet) {
   Impl& d = *impl_;
   // An empty packet would mean "end of stream" to libavcodec; containers can carry empty samples.
-  if (packet.bytes.empty()) return;
+  if (packet.bytes.empty()) return true;
   AVPacket* pkt = d.packet.get();
   av_packet_unref(pkt);
   // Not reference-counted: libavcodec copies the bytes into a padded buffer of its own.
@@ -472,24 +500,15 @@ void VideoDecoder::send(const Packet& packet) {
   pkt->dts = packet.dts == kNoPts ? AV_NOPTS_VALUE : packet.dts;
   pkt->flags = packet.keyframe ? AV_PKT_FLAG_KEY : 0;
   d.last_packet = packet.index;
-  if (d.motion) {
-    d.drainMotion();
-    d.checkSend(avcodec_send_packet(d.motion.get(), pkt), pkt, packet.index);
-    d.drainMotion();
-  }
-  d.checkSend(d.pixel->send(pkt), pkt, packet.index);
+  d.refusal = d.feed(pkt, packet.index);
   pkt->data = nullptr;
   pkt->size = 0;
+  return d.refusal == 0;
 }
 
 void VideoDecoder::sendEnd() {
   Impl& d = *impl_;
-  if (d.motion) {
-    d.drainMotion();
-    d.checkSend(avcodec_send_packet(d.motion.get(), nullptr), nullptr, d.last_packet + 1);
-    d.drainMotion();
-  }
-  d.checkSend(d.pixel->send(nullptr), nullptr, d.last_packet + 1);
+  if (const int rc = d.feed(nullptr, d.last_packet + 1); rc != 0) d.fail(rc, "while flushing");
 }
 
 void VideoDecoder::Impl::convert(const AVFrame& pixels, const AVFrame& vectors, DecodedFrame& out) {
@@ -572,5 +591,7 @@ bool VideoDecoder::receive(DecodedFrame& out) {
   out.damaged = damaged;
   return true;
 }
+
+void silenceDamageMessages() { av_log_set_level(AV_LOG_FATAL); }
 
 }  // namespace voca::decode

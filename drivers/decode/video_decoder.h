@@ -74,6 +74,9 @@ class VideoDecoder {
 
   // Feeds one packet (decode order). Call receive() until it returns false after each send.
   void send(const Packet& packet);
+  // send() for a stream expected to carry damage: a packet the decoder refuses as corrupt returns
+  // false (the frame is lost) instead of throwing, and allocates nothing. Other failures still throw.
+  bool trySend(const Packet& packet);
   // Signals the end of the stream; receive() then drains the frames held back.
   void sendEnd();
   // The next decoded frame, or false when none is ready (or the stream has ended).
@@ -90,5 +93,10 @@ class VideoDecoder {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Turns off libavcodec's messages about damaged data ("error while decoding MB ..."), several per
+// damaged picture, for the rest of the process: for runs that damage streams on purpose and count
+// the damaged frames instead. Only fatal messages remain.
+void silenceDamageMessages();
 
 }  // namespace voca::decode

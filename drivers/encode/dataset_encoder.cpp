@@ -357,9 +357,20 @@ DatasetEncodeProgress progressOnLine(platform::ProgressLine& line) {
 
 bool encodeForReplay(const fs::path& input, const fs::path& out, std::int64_t bitrate_bps,
                      const std::optional<fs::path>& calibration, bool progress,
-                     const std::function<bool()>& stop_requested) {
+                     const std::function<bool()>& stop_requested, int keyframe_interval) {
   DatasetEncodeOptions options;
   options.settings.bitrate_bps = bitrate_bps;
+  if (keyframe_interval > 0) {
+    std::string& params = options.settings.x264_params;
+    const std::string keyint = fmt::format("keyint={}", keyframe_interval);
+    const std::size_t at = params.find("keyint=");
+    if (at == std::string::npos) {
+      params += ":" + keyint;
+    } else {
+      const std::size_t end = params.find(':', at);
+      params.replace(at, end == std::string::npos ? std::string::npos : end - at, keyint);
+    }
+  }
   options.calibration = calibration;
   options.stop_requested = stop_requested;
   silenceCodecLogs();

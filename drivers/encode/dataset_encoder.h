@@ -93,8 +93,10 @@ DatasetEncodeProgress progressOnLine(platform::ProgressLine& line);
 // into a VOCA video folder at out, for a run that replays it: `voca run --encode`, the benches and
 // the evaluation harness. Progress goes to stderr when asked. Returns false, having written nothing,
 // when stop_requested() turns true first; throws as encodeDataset does.
+// keyframe_interval > 0 replaces the paper's keyint of 1000 (a stream that must recover from damage
+// soon).
 bool encodeForReplay(const std::filesystem::path& input, const std::filesystem::path& out, std::int64_t bitrate_bps,
                      const std::optional<std::filesystem::path>& calibration, bool progress,
-                     const std::function<bool()>& stop_requested);
+                     const std::function<bool()>& stop_requested, int keyframe_interval = 0);
 
 }  // namespace voca::encode

@@ -25,6 +25,12 @@ void checkSpec(const BenchSequenceSpec& spec) {
   }
   if (spec.seconds < 1) throw InputError(fmt::format("benchmark sequence: {} s is too short", spec.seconds));
   if (spec.bitrate_bps <= 0) throw InputError("benchmark sequence: the bitrate must be positive");
+  if (spec.supersample < 1 || spec.supersample > 8) {
+    throw InputError(fmt::format("benchmark sequence: supersample {} is outside 1..8", spec.supersample));
+  }
+  if (spec.keyframe_interval < 0) {
+    throw InputError(fmt::format("benchmark sequence: keyframe interval {} is negative", spec.keyframe_interval));
+  }
 }
 
 // Renders the sequence into raw (a fresh folder) in this process, with `voca synth`'s defaults
@@ -37,6 +43,7 @@ bool render(const BenchSequenceSpec& spec, const fs::path& raw, bool progress,
   options.motion = spec.motion;
   options.seconds = spec.seconds;
   options.rate_hz = kRateHz;
+  options.supersample = spec.supersample;
   options.progress = progress;
   options.stop_requested = stop_requested;
   return !pipeline::synthesizeSequence(options).stopped;
@@ -53,8 +60,12 @@ fs::path benchCacheRoot() {
 }
 
 fs::path benchSequenceFolder(const BenchSequenceSpec& spec, const fs::path& root) {
-  return root / "bench" /
-         fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, encode::bitrateLabel(spec.bitrate_bps));
+  const BenchSequenceSpec defaults;
+  std::string name =
+      fmt::format("{}-{}-{}s-{}", spec.camera, spec.motion, spec.seconds, encode::bitrateLabel(spec.bitrate_bps));
+  if (spec.supersample != defaults.supersample) name += fmt::format("-ss{}", spec.supersample);
+  if (spec.keyframe_interval != defaults.keyframe_interval) name += fmt::format("-gop{}", spec.keyframe_interval);
+  return root / "bench" / name;
 }
 
 std::string benchSequenceConfig(const BenchSequenceSpec& spec) { return spec.camera; }
@@ -72,23 +83,29 @@ std::optional<fs::path> ensureBenchSequence(const BenchSequenceSpec& spec, const
   checkSpec(spec);
   const fs::path video = benchSequenceFolder(spec, root);
   if (fs::is_directory(video)) return video;
-  const fs::path raw = video.string() + ".raw.partial";
   const fs::path partial = video.string() + ".partial";
-  fs::remove_all(raw);
   fs::remove_all(partial);
   fs::create_directories(video.parent_path());
   if (progress) {
     fmt::print(stderr, "generating the {} once (cached in {}); this takes minutes\n", describeBenchSequence(spec),
                video.string());
   }
-  if (!render(spec, raw, progress, stop_requested)) return std::nullopt;
-  if (!encode::encodeForReplay(raw, partial, spec.bitrate_bps, std::nullopt, progress, stop_requested)) {
-    return std::nullopt;
-  }
-  // The encoding keeps the ground truth; the rendering (hundreds of MB of PNG) is not needed again.
+  if (!generateBenchSequence(spec, partial, progress, stop_requested)) return std::nullopt;
   fs::rename(partial, video);
-  fs::remove_all(raw);
   return video;
+}
+
+bool generateBenchSequence(const BenchSequenceSpec& spec, const fs::path& video, bool progress,
+                           const std::function<bool()>& stop_requested) {
+  checkSpec(spec);
+  const fs::path raw = video.string() + ".raw.partial";
+  fs::remove_all(raw);
+  const bool done = render(spec, raw, progress, stop_requested) &&
+                    encode::encodeForReplay(raw, video, spec.bitrate_bps, std::nullopt, progress, stop_requested,
+                                            spec.keyframe_interval);
+  // The encoding keeps the ground truth; the rendering (hundreds of MB of PNG) is not needed again.
+  fs::remove_all(raw);
+  return done;
 }
 
 }  // namespace voca::harness

@@ -17,6 +17,8 @@ struct BenchSequenceSpec {
   std::string motion = "aggressive";
   int seconds = 40;
   std::int64_t bitrate_bps = 500'000;
+  int supersample = 3;        // `voca synth --supersample`: 1 renders faster, with rougher edges
+  int keyframe_interval = 0;  // frames between keyframes; 0: the paper's encoding (keyint 1000)
 };
 
 // Where generated sequences are kept: $XDG_CACHE_HOME/voca, else $HOME/.cache/voca. Throws InputError
@@ -31,6 +33,13 @@ std::string benchSequenceConfig(const BenchSequenceSpec& spec);
 
 // "moving euroc sequence (752x480 synthetic, aggressive motion, 40 s, 500kbit/s)", for headers.
 std::string describeBenchSequence(const BenchSequenceSpec& spec);
+
+// Renders spec (as `voca synth`) into a scratch folder beside video and encodes it into the VOCA video
+// folder video, both in this process; the rendering is removed afterwards. Progress goes to stderr
+// when asked. False when stop_requested() turned true (checked between frames); throws InputError
+// for an invalid spec.
+bool generateBenchSequence(const BenchSequenceSpec& spec, const std::filesystem::path& video, bool progress,
+                           const std::function<bool()>& stop_requested);
 
 // The video folder of spec under root, generating it first when it is missing: rendering (as
 // `voca synth`) and the two-pass encoding, both in this process. Work goes into *.partial folders

@@ -2,8 +2,12 @@
 
 #include <fmt/core.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
+#include <iterator>
+#include <string_view>
 #include <utility>
 
 #include "voca/core/error.h"
@@ -14,6 +18,8 @@ namespace {
 
 // Frames a decoder may hold back before the stage gives up on it (hardware decoders hold a few).
 constexpr std::size_t kMaxPending = 32;
+// Room for the longest reason a frame is damaged, beyond its camera's name.
+constexpr std::size_t kReasonCapacity = 200;
 
 }  // namespace
 
@@ -23,7 +29,16 @@ struct DecodeStage::Impl {
     std::array<std::int64_t, 2> pts{};
     std::array<bool, 2> resolved{};  // the camera's picture came out, or is known to be missing
     bool damaged = false;
-    std::string why;  // for strict-mode errors
+    std::string why;  // for strict-mode errors; its buffer is kept from frame to frame
+
+    // Empties it for the next frame, keeping why's buffer: a damaged frame then allocates nothing.
+    void reset(FrameSlot* next) {
+      slot = next;
+      pts = {};
+      resolved = {};
+      damaged = false;
+      why.clear();
+    }
   };
 
   DecodeStageOptions options;
@@ -42,6 +57,7 @@ struct DecodeStage::Impl {
   std::array<decode::DecodedFrame, 2> scratch;
   std::array<Pending, kMaxPending> pending;  // a ring, oldest at head
   std::size_t head = 0, size = 0;
+  fmt::memory_buffer reason;  // a reason being formatted, in fixed storage
 
   Pending& at(std::size_t i) { return pending[(head + i) % kMaxPending]; }
 
@@ -51,10 +67,13 @@ struct DecodeStage::Impl {
     if (p.pts[c] != decode::kNoPts) settled_pts[c] = std::max(settled_pts[c], p.pts[c]);
   }
 
-  void markDamaged(Pending& p, int camera, const std::string& why) {
+  void markDamaged(Pending& p, int camera, std::string_view why) {
     settle(p, camera);
     references_damaged[static_cast<std::size_t>(camera)] = true;
-    if (!p.damaged) p.why = fmt::format("{}: {}", options.names[static_cast<std::size_t>(camera)], why);
+    if (!p.damaged) {
+      p.why.clear();
+      fmt::format_to(std::back_inserter(p.why), "{}: {}", options.names[static_cast<std::size_t>(camera)], why);
+    }
     p.damaged = true;
   }
 
@@ -113,18 +132,19 @@ struct DecodeStage::Impl {
         // Thrown with the frame still held, so that releaseHeld() hands its slot back.
         throw InputError(fmt::format("frame {} is damaged ({})", at(0).slot->frameIndex(), at(0).why));
       }
-      Pending p = std::move(at(0));
-      at(0) = Pending{};
+      FrameSlot& slot = *at(0).slot;
+      const bool damaged = at(0).damaged;
+      at(0).reset(nullptr);
       head = (head + 1) % kMaxPending;
       --size;
-      if (p.slot->frameIndex() < options.first_tracked_frame) {
-        out.release(*p.slot, ReleaseReason::kNotTracked);
-      } else if (!p.damaged) {
-        p.slot->frame.has_motion = options.decoder.export_motion;
-        p.slot->frame.decoded = true;
-        out.forward(*p.slot);
+      if (slot.frameIndex() < options.first_tracked_frame) {
+        out.release(slot, ReleaseReason::kNotTracked);
+      } else if (!damaged) {
+        slot.frame.has_motion = options.decoder.export_motion;
+        slot.frame.decoded = true;
+        out.forward(slot);
       } else {
-        out.release(*p.slot, ReleaseReason::kDamaged);
+        out.release(slot, ReleaseReason::kDamaged);
       }
     }
   }
@@ -138,10 +158,12 @@ struct DecodeStage::Impl {
     while (size > limit) {
       for (int c = 0; c < 2; ++c) {
         if (!at(0).resolved[static_cast<std::size_t>(c)]) {
-          markDamaged(at(0), c,
-                      fmt::format("its picture had not come out of the decoder after {} more packets "
-                                  "(undecodable until the next keyframe after lost data?)",
-                                  size - 1));
+          reason.clear();
+          fmt::format_to(std::back_inserter(reason),
+                         "its picture had not come out of the decoder after {} more packets "
+                         "(undecodable until the next keyframe after lost data?)",
+                         size - 1);
+          markDamaged(at(0), c, std::string_view(reason.data(), reason.size()));
         }
       }
       emitReady(out);
@@ -153,7 +175,7 @@ struct DecodeStage::Impl {
     for (std::size_t i = 0; i < size; ++i) {
       Pending& p = at(i);
       if (p.slot != current) out.release(*p.slot, ReleaseReason::kAborted);
-      p = Pending{};
+      p.reset(nullptr);
     }
     head = 0;
     size = 0;
@@ -167,6 +189,8 @@ DecodeStage::DecodeStage(const std::array<decode::StreamInfo, 2>& streams, const
     impl_->decoders[c] = std::make_unique<decode::VideoDecoder>(streams[c], options.decoder, nullptr, options.names[c]);
     impl_->scratch[c].reserve(streams[c].width, streams[c].height);
   }
+  const std::size_t longest_name = std::max(options.names[0].size(), options.names[1].size());
+  for (Impl::Pending& p : impl_->pending) p.why.reserve(longest_name + kReasonCapacity);
 }
 
 DecodeStage::~DecodeStage() = default;
@@ -200,12 +224,17 @@ void DecodeStage::finish(Emitter& out) {
 void DecodeStage::Impl::decode(FrameSlot& slot, Emitter& out) {
   Impl& d = *this;
   Impl::Pending& p = d.at(d.size++);
-  p = Impl::Pending{};
-  p.slot = &slot;
+  p.reset(&slot);
   for (std::size_t c = 0; c < 2; ++c) p.pts[c] = slot.encoded.packets[c].pts;
   for (int c = 0; c < 2; ++c) {
+    const decode::Packet& packet = slot.encoded.packets[static_cast<std::size_t>(c)];
+    decode::VideoDecoder& decoder = *d.decoders[static_cast<std::size_t>(c)];
     try {
-      d.decoders[static_cast<std::size_t>(c)]->send(slot.encoded.packets[static_cast<std::size_t>(c)]);
+      if (d.options.decoder.strict) {
+        decoder.send(packet);  // throws, naming the packet
+      } else if (!decoder.trySend(packet) && !p.resolved[static_cast<std::size_t>(c)]) {
+        d.markDamaged(p, c, "the decoder refused its packet as corrupt");
+      }
     } catch (const InputError& e) {
       // Non-strict decoding reports bad data per frame instead of stopping (strict rethrows).
       if (d.options.decoder.strict) throw;

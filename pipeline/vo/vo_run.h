@@ -74,7 +74,10 @@ struct VoRunOptions {
   std::filesystem::path statistics_file;  // JSON: totals, per-stage latency, drops, per-frame rows
   std::filesystem::path overlay_file;     // .mp4 of the left camera with the tracks drawn
   bool keep_trajectory = true;            // in memory too (for evaluation and callers)
-  std::vector<FrameSink*> extra_sinks;    // also given every finished frame, after the built-in sinks
+  // Per-frame statistics rows kept in memory (VoRunResult::rows); -1: the expected frame count, an
+  // hour at 30 Hz for live input. A soak test keeps none: its memory must not grow with its length.
+  std::int64_t statistics_rows = -1;
+  std::vector<FrameSink*> extra_sinks;  // also given every finished frame, after the built-in sinks
   // ROS 2 (--ros2): every tracked pose as nav_msgs/Odometry and the odom -> base transform on /tf over
   // DDS, written by a thread of its own (pipeline/sinks/ros2_sink.h). Needs estimate.
   std::optional<ros2::OdometryPublisherOptions> ros2;

@@ -204,6 +204,8 @@ void VoSession::Impl::build(const StereoRig& rig) {
   const auto expected = static_cast<std::size_t>(std::max<std::int64_t>(info.expected_frames, 0));
   // Live input has no known length: keep an hour of rows at 30 Hz in memory and count the rest.
   const std::size_t capacity = expected > 0 ? expected : 30 * 3600;
+  const std::size_t statistics_rows =
+      options.statistics_rows >= 0 ? static_cast<std::size_t>(options.statistics_rows) : capacity;
   std::vector<FrameSink*> sinks;
   if (options.estimate) {
     trajectory = std::make_unique<TrajectorySink>(
@@ -211,7 +213,7 @@ void VoSession::Impl::build(const StereoRig& rig) {
         options.trajectory_format, options.keep_trajectory ? capacity : 0, rig.cameras[0].T_body_cam);
     sinks.push_back(trajectory.get());
   }
-  statistics = std::make_unique<StatisticsSink>(capacity, decode_position, frontend_position, backend_position);
+  statistics = std::make_unique<StatisticsSink>(statistics_rows, decode_position, frontend_position, backend_position);
   sinks.push_back(statistics.get());
   if (!options.overlay_file.empty()) {
     encode::silenceCodecLogs();  // libavcodec prints x264's settings at info level otherwise

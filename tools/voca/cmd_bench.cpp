@@ -11,6 +11,7 @@
 #include "tools/voca/bench_decode.h"
 #include "tools/voca/bench_frontend.h"
 #include "tools/voca/bench_pipeline.h"
+#include "tools/voca/bench_soak.h"
 #include "tools/voca/bench_suite.h"
 #include "tools/voca/command.h"
 
@@ -32,6 +33,8 @@ const std::vector<BenchMode>& benchModes() {
       {"frontend", "Frontend CPU time per stereo frame for each prior mode", voca::cli::configureFrontendBench},
       {"pipeline", "Whole-pipeline frames/s offline (1 thread vs staged), latency at real rate, peak memory",
        voca::cli::configurePipelineBench},
+      {"soak", "The live pipeline for an hour of frames on a looping, lossy source: RSS, allocations, queues, frames",
+       voca::cli::configureSoakBench},
       {"backend", "Estimator cost per frame on the tracks of a moving sequence (or --synthetic observations)",
        voca::cli::configureBackendBench},
       {"suite", "Evaluation suite: sequences x bitrates x modes -> the paper's tables (resumable, --jobs, cluster)",

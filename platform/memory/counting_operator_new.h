@@ -1,0 +1,39 @@
+#pragma once
+// Counting replacements of the global operator new/delete (allocation_count.h reads the count): for
+// tests that prove a hot path does not allocate, and for `voca bench soak`, which measures it over
+// hours. Include in exactly one source file of an executable: they replace the program's operators.
+
+#include <cstdlib>
+#include <new>
+
+#include "platform/memory/allocation_count.h"
+
+namespace voca::platform {
+inline const bool kOperatorNewCountingInstalled = (g_operator_new_counted.store(true), true);
+}  // namespace voca::platform
+
+// Exported: the project builds with hidden visibility, and shared libraries loaded later must call
+// these too.
+#pragma GCC visibility push(default)
+void* operator new(std::size_t size) {
+  voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, std::align_val_t align) {
+  voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
+  const std::size_t a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#pragma GCC visibility pop
