@@ -281,8 +281,14 @@ TEST_CASE("detector: detectionCells counts the cells detect() can fill, known an
   // Noise holds corners everywhere: an empty image gets exactly one corner per such cell.
   std::mt19937 rng(3);
   std::uniform_int_distribution<int> grey(0, 255);
-  for (const auto& [w, h, grid, border] : {std::tuple{160, 120, 40, 19}, std::tuple{157, 113, 23, 7},
-                                           std::tuple{96, 64, 40, 19}, std::tuple{41, 39, 16, 2}}) {
+  // Plain variables, not a structured binding: CAPTURE's lambda cannot capture one before C++20's
+  // rule reached every compiler (clang 16).
+  for (const auto& size_case : {std::tuple{160, 120, 40, 19}, std::tuple{157, 113, 23, 7}, std::tuple{96, 64, 40, 19},
+                                std::tuple{41, 39, 16, 2}}) {
+    const int w = std::get<0>(size_case);
+    const int h = std::get<1>(size_case);
+    const int grid = std::get<2>(size_case);
+    const int border = std::get<3>(size_case);
     CAPTURE(w);
     CAPTURE(grid);
     GrayImage image(w, h);

@@ -149,9 +149,14 @@ TEST_CASE("frame rate is selectable and becomes the stream rate") {
 TEST_CASE("odd frame sizes are coded whole: decoders return the original size, last column and row included") {
   // KITTI 00-02 are 1241x376. H.264 signals the size through the SPS crop window; libx264 codes an
   // odd size as 4:0:0, whose crop unit is one pixel. MPEG-4/MPEG-2 store the size as it is.
-  for (const auto& [codec, width, height] :
+  // Plain variables, not a structured binding: CAPTURE's and the checks' lambdas cannot capture one
+  // in clang before 16.
+  for (const auto& size_case :
        {std::tuple{"libx264", 161, 121}, std::tuple{"libx264", 161, 120}, std::tuple{"libx264", 160, 121},
         std::tuple{"mpeg4", 161, 121}, std::tuple{"mpeg2video", 161, 121}}) {
+    const char* const codec = std::get<0>(size_case);
+    const int width = std::get<1>(size_case);
+    const int height = std::get<2>(size_case);
     CAPTURE(codec);
     CAPTURE(width);
     CAPTURE(height);
