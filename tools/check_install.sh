@@ -109,8 +109,11 @@ if [ "$preset" = release ]; then
 
   # 2. A CMake project against the installed tree only; it must run with the prefix's library.
   build_example "$prefix"
-  ldd "$work/example/voca_example_odometry" | grep -q "libvoca-rt.so.$major => $prefix/" ||
-    fail "the example does not load libvoca-rt.so.$major from $prefix: $(ldd "$work/example/voca_example_odometry")"
+  # ldd's output is kept whole first: `ldd | grep -q` under pipefail fails whenever grep exits before
+  # ldd has written its last line (SIGPIPE), which depends on the machine's load.
+  loaded=$(ldd "$work/example/voca_example_odometry" | sed -n "s|^[[:space:]]*libvoca-rt\.so\.$major => \([^ ]*\) .*|\1|p")
+  [ -n "$loaded" ] && [ "$(realpath "$loaded")" = "$(realpath "$prefix/$libdir/libvoca-rt.so.$major")" ] ||
+    fail "the example loads libvoca-rt.so.$major from '${loaded:-nowhere}', not from $prefix/$libdir"
 
   # 3. A one-file consumer through pkg-config (only our .pc visible): the version and an exception
   # thrown inside the library caught by its type in the program.
