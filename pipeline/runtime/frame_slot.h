@@ -10,10 +10,10 @@
 
 #include "drivers/source/stereo_source.h"
 #include "platform/realtime/clock.h"
-#include "voca/backend/estimator.h"
+#include "voca/backend/pose_estimate.h"
 #include "voca/core/stereo_frame.h"
 #include "voca/core/tracked_frame.h"
-#include "voca/frontend/frontend.h"
+#include "voca/frontend/frontend_stats.h"
 
 namespace voca::pipeline {
 
