@@ -18,11 +18,12 @@ using backend::WindowFrame;
 
 namespace {
 
-// Checks the inputs before any member is built from them.
-const BackendConfig& validated(const BackendConfig& config, const StereoRig& rig) {
+// The optimiser, which owns the config and the measurement model, built after the inputs are checked.
+backend::WindowOptimizer checkedOptimizer(const BackendConfig& config, const StereoRig& rig) {
   validateBackendConfig(config, "backend");
   rig.requireStereo();
-  return config;
+  return backend::WindowOptimizer(config,
+                                  backend::StereoResiduals(rig, config.obs_std_dev_px, config.obs_huber_thresh_px));
 }
 
 }  // namespace
@@ -63,14 +64,12 @@ std::string_view untrackedCause(const PoseEstimate& estimate) {
 }
 
 VoEstimator::VoEstimator(const BackendConfig& config, const StereoRig& rig)
-    : config_(validated(config, rig)),
-      model_(rig, config_.obs_std_dev_px, config_.obs_huber_thresh_px),
+    : optimizer_(checkedOptimizer(config, rig)),
       T_body_cam0_(rig.cameras[0].T_body_cam),
-      window_(config_.max_observations_per_camera),
-      landmarks_(config_.max_landmarks),
-      optimizer_(config_, model_) {
-  scratch_landmarks_.reserve(static_cast<std::size_t>(config_.max_landmarks));
-  frame_verdicts_.resize(static_cast<std::size_t>(config_.max_landmarks));
+      window_(config.max_observations_per_camera),
+      landmarks_(config.max_landmarks) {
+  scratch_landmarks_.reserve(static_cast<std::size_t>(config.max_landmarks));
+  frame_verdicts_.resize(static_cast<std::size_t>(config.max_landmarks));
   reset();
 }
 
@@ -112,9 +111,9 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
   f.in_prior = true;
   f.T_w_c_lin = origin;
   // The first pose is fixed by a strong prior (gauge freedom of VO: position and all three rotations).
-  prior_.fixPose(slot, config_.init_pose_weight);
-  const int created = backend::triangulateNewLandmarks(slot, window_, landmarks_, model_, config_);
-  if (created < config_.min_inliers) {
+  prior_.fixPose(slot, config().init_pose_weight);
+  const int created = backend::triangulateNewLandmarks(slot, window_, landmarks_, model(), config());
+  if (created < config().min_inliers) {
     reset();
     pending_reset_ = pending;
     previous_T_w_c_ = origin;
@@ -128,7 +127,7 @@ bool VoEstimator::initialize(const TrackedStereoFrame& frame, const SE3d& T_w_c)
 int VoEstimator::removeFrameOutliers(int frame) {
   constexpr std::uint8_t kJudged = 16;
   const std::uint32_t bits = frameBits(frame);
-  const backend::WindowPoses poses = model_.windowPoses(window_);
+  const backend::WindowPoses poses = model().windowPoses(window_);
   const std::vector<int>& alive = landmarks_.alive();
   int judged = 0, beyond = 0;
   for (std::size_t k = 0; k < alive.size(); ++k) {
@@ -142,16 +141,16 @@ int VoEstimator::removeFrameOutliers(int frame) {
       if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
       ++judged;
       Eigen::Vector2d r;
-      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr)) {
+      if (!model().residual(poses, bearing, lm, frame, c, r, nullptr)) {
         verdict |= static_cast<std::uint8_t>(1u << c);
-      } else if (r.norm() > config_.outlier_threshold_px) {
+      } else if (r.norm() > config().outlier_threshold_px) {
         verdict |= static_cast<std::uint8_t>(4u << c);
         ++beyond;
       }
     }
   }
   // Unprojectable views go always; views beyond the threshold only while they are the minority.
-  const std::uint8_t removable = beyond > config_.max_frame_outlier_share * judged ? 3u : 15u;
+  const std::uint8_t removable = beyond > config().max_frame_outlier_share * judged ? 3u : 15u;
   int removed = 0;
   // Removing a landmark moves the last one of alive() to its position, one already visited.
   for (std::size_t k = alive.size(); k-- > 0;) {
@@ -178,10 +177,10 @@ bool VoEstimator::isNewKeyframe(int frame) const {
   }
   const int total = static_cast<int>(f.obs[0].size());
   // Too few connected points to keep tracking: triangulate now whatever the frame count says.
-  if (connected < 2 * config_.min_inliers) return true;
+  if (connected < 2 * config().min_inliers) return true;
   const double ratio = total > 0 ? static_cast<double>(connected) / total : 0.0;
-  if (config_.max_frames_after_kf > 0 && frames_since_kf_ >= config_.max_frames_after_kf) return true;
-  return ratio < config_.new_kf_keypoints_thresh && frames_since_kf_ > config_.min_frames_after_kf;
+  if (config().max_frames_after_kf > 0 && frames_since_kf_ >= config().max_frames_after_kf) return true;
+  return ratio < config().new_kf_keypoints_thresh && frames_since_kf_ > config().min_frames_after_kf;
 }
 
 // ---- marginalisation ----------------------------------------------------------------------------
@@ -207,7 +206,7 @@ int VoEstimator::chooseKeyframeToMarginalize(int newest) const {
     const WindowFrame& f = window_[i];
     if (!f.active || !f.keyframe || i == newest || i == previous_kf) continue;
     const auto n = static_cast<std::size_t>(i);
-    const bool lost = hosted[n] == 0 || static_cast<double>(connected[n]) / hosted[n] < config_.kf_marg_feature_ratio;
+    const bool lost = hosted[n] == 0 || static_cast<double>(connected[n]) / hosted[n] < config().kf_marg_feature_ratio;
     if (lost && (oldest_lost < 0 || f.sequence < window_[oldest_lost].sequence)) oldest_lost = i;
   }
   if (oldest_lost >= 0) return oldest_lost;
@@ -246,7 +245,7 @@ void VoEstimator::prepareMarginalization(int frame) {
     const int i = landmarks_.alive()[static_cast<std::size_t>(k)];
     Landmark& lm = landmarks_[i];
     if (!lm.alive || lm.host != frame) continue;
-    if (!config_.rehost_landmarks || newest == frame || (lm.mask & newest_bits) == 0) {
+    if (!config().rehost_landmarks || newest == frame || (lm.mask & newest_bits) == 0) {
       scratch_landmarks_.push_back(i);
       continue;
     }
@@ -268,7 +267,7 @@ void VoEstimator::prepareMarginalization(int frame) {
                                                          (T_w_h.translation() - T_w_k.translation()) * lm.rho);
       const double norm = q.norm();
       const double rho = lm.rho / norm;
-      if (norm > 0.0 && q.z() > -0.9 * norm && rho > 0.0 && rho <= 2.0 * config_.max_inverse_distance) {
+      if (norm > 0.0 && q.z() > -0.9 * norm && rho > 0.0 && rho <= 2.0 * config().max_inverse_distance) {
         lm.s = stereographicProject(q);
         lm.rho = rho;
         lm.host = new_host;
@@ -301,7 +300,7 @@ void VoEstimator::frameStats(int frame, PoseEstimate& out) const {
   double sum_sq = 0.0, depth = 0.0;
   int inliers = 0, depth_count = 0;
   const std::uint32_t bits = frameBits(frame);
-  const backend::WindowPoses poses = model_.windowPoses(window_);
+  const backend::WindowPoses poses = model().windowPoses(window_);
   for (const int i : landmarks_.alive()) {
     const Landmark& lm = landmarks_[i];
     if (!lm.alive || (lm.mask & bits) == 0) continue;
@@ -309,7 +308,7 @@ void VoEstimator::frameStats(int frame, PoseEstimate& out) const {
     for (int c = 0; c < 2; ++c) {
       if ((lm.mask & (1u << maskBit(frame, c))) == 0) continue;
       Eigen::Vector2d r;
-      if (!model_.residual(poses, bearing, lm, frame, c, r, nullptr)) continue;
+      if (!model().residual(poses, bearing, lm, frame, c, r, nullptr)) continue;
       sum_sq += r.squaredNorm();
       ++inliers;
     }
@@ -396,15 +395,15 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
     }
     return count;
   };
-  if (countInliers() < config_.min_inliers) return fail(FailureReason::kTooFewInliers);
+  if (countInliers() < config().min_inliers) return fail(FailureReason::kTooFewInliers);
 
   est.keyframe = isNewKeyframe(n);
   if (est.keyframe) {
     window_[n].keyframe = true;
     frames_since_kf_ = 0;
-    est.new_landmarks = backend::triangulateNewLandmarks(n, window_, landmarks_, model_, config_);
+    est.new_landmarks = backend::triangulateNewLandmarks(n, window_, landmarks_, model(), config());
   }
-  est.lm_iterations = optimizer_.optimize(state(), config_.max_iterations, true);
+  est.lm_iterations = optimizer_.optimize(state(), config().max_iterations, true);
   est.lm_linearizations = optimizer_.linearizations();
   est.lm_cost_passes = optimizer_.costPasses();
 
@@ -414,15 +413,15 @@ const PoseEstimate& VoEstimator::process(const TrackedStereoFrame& frame) {
   if (!T_w_c.translation().allFinite() || !T_w_c.unitQuaternion().coeffs().allFinite()) {
     return fail(FailureReason::kExplodingCost);
   }
-  if (est.num_inliers < config_.min_inliers) return fail(FailureReason::kTooFewInliers);
-  if (est.rms_reprojection_px > config_.max_rms_reprojection_px) return fail(FailureReason::kExplodingCost);
-  if (step.translation().norm() > config_.max_translation_per_frame_m * intervals ||
-      step.so3().angle() > config_.max_rotation_per_frame_deg * M_PI / 180.0 * intervals) {
+  if (est.num_inliers < config().min_inliers) return fail(FailureReason::kTooFewInliers);
+  if (est.rms_reprojection_px > config().max_rms_reprojection_px) return fail(FailureReason::kExplodingCost);
+  if (step.translation().norm() > config().max_translation_per_frame_m * intervals ||
+      step.so3().angle() > config().max_rotation_per_frame_deg * M_PI / 180.0 * intervals) {
     return fail(FailureReason::kImpossibleMotion);
   }
 
   if (est.keyframe) {
-    while (window_.numKeyframes() > config_.max_keyframes) {
+    while (window_.numKeyframes() > config().max_keyframes) {
       const int m = chooseKeyframeToMarginalize(n);
       if (m < 0) break;
       marginalize(m);

@@ -39,7 +39,7 @@ class VoEstimator {
   // Forgets everything; the next frame starts a new trajectory at the identity body pose.
   void reset();
 
-  const BackendConfig& config() const { return config_; }
+  const BackendConfig& config() const { return optimizer_.config(); }
   int numKeyframes() const { return window_.numKeyframes(); }
   int numLandmarks() const { return landmarks_.size(); }
   // The most landmarks the window holds (BackendConfig::max_landmarks).
@@ -81,13 +81,13 @@ class VoEstimator {
   void frameStats(int frame, PoseEstimate& out) const;
   backend::WindowStateRefs state() { return {window_, landmarks_, prior_}; }
 
-  BackendConfig config_;
-  backend::StereoResiduals model_;
+  const backend::StereoResiduals& model() const { return optimizer_.model(); }
+
+  backend::WindowOptimizer optimizer_;  // owns the config and the measurement model
   SE3d T_body_cam0_;
   backend::Window window_;
   backend::LandmarkStore landmarks_;
   backend::MarginalizationPrior prior_;
-  backend::WindowOptimizer optimizer_;
   std::vector<int> scratch_landmarks_;  // the landmarks marginalised with a keyframe
   // Per position of landmarks_.alive(): which of the new frame's two views removeFrameOutliers
   // judged unprojectable (bits 0-1) or beyond the threshold (bits 2-3), and bit 4 for each landmark

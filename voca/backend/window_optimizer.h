@@ -85,6 +85,11 @@ class WindowOptimizer {
   // All memory for max_landmarks is taken here.
   WindowOptimizer(const BackendConfig& config, const StereoResiduals& model);
 
+  // The estimator's configuration and measurement model: the optimiser owns them (its loops read
+  // them most) and the estimator reads them from here.
+  const BackendConfig& config() const { return config_; }
+  const StereoResiduals& model() const { return model_; }
+
   // Total cost: robust reprojection cost (an observation that cannot be projected counts like an
   // error of 10x the outlier threshold) plus the prior's.
   double cost(const WindowStateRefs& state) const;
