@@ -80,8 +80,7 @@ std::string formatRates(const FrameSizeInfo& size) {
 
 bool isCameraNode(std::uint32_t capabilities) {
   const bool captures = (capabilities & V4L2_CAP_VIDEO_CAPTURE) != 0;
-  const bool memory_to_memory = (capabilities & (V4L2_CAP_VIDEO_M2M | V4L2_CAP_VIDEO_M2M_MPLANE)) != 0;
-  return captures && !memory_to_memory && (capabilities & V4L2_CAP_STREAMING) != 0;
+  return captures && !platform::isMemoryToMemory(capabilities) && (capabilities & V4L2_CAP_STREAMING) != 0;
 }
 
 std::vector<V4l2DeviceInfo> listCameras(platform::V4l2Io& io, std::vector<std::string>* skipped) {

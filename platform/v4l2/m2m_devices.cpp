@@ -27,14 +27,10 @@ void readCodecFormats(V4l2Io& io, int fd, V4l2NodeCaps& caps) {
   caps.capture_formats = compressedFormats(io, fd, V4L2_BUF_TYPE_VIDEO_CAPTURE, V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE);
 }
 
-bool isM2mNode(std::uint32_t capabilities) {
-  return (capabilities & (V4L2_CAP_VIDEO_M2M | V4L2_CAP_VIDEO_M2M_MPLANE)) != 0;
-}
-
 }  // namespace
 
 bool isM2mCodec(const V4l2NodeCaps& node, M2mRole role, std::uint32_t format) {
-  if (!isM2mNode(node.capabilities)) return false;
+  if (!isMemoryToMemory(node.capabilities)) return false;
   const auto& formats = role == M2mRole::kDecoder ? node.output_formats : node.capture_formats;
   return std::find(formats.begin(), formats.end(), format) != formats.end();
 }
@@ -52,7 +48,7 @@ bool queryV4l2Node(const std::string& path, V4l2NodeCaps& caps, V4l2Io& io) {
 std::vector<std::string> findM2mCodecNodes(M2mRole role, std::uint32_t format, V4l2Io& io) {
   std::vector<std::string> nodes;
   forEachV4l2Node(io, [&](int fd, const V4l2NodeInfo& info) {
-    if (!isM2mNode(info.capabilities)) return;  // cameras and the like: no need to list their formats
+    if (!isMemoryToMemory(info.capabilities)) return;  // cameras and the like: no need to list their formats
     V4l2NodeCaps caps;
     static_cast<V4l2NodeInfo&>(caps) = info;
     readCodecFormats(io, fd, caps);

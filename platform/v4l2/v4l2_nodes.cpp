@@ -17,6 +17,10 @@ std::string cString(const std::uint8_t* text, std::size_t size) {
 
 }  // namespace
 
+bool isMemoryToMemory(std::uint32_t capabilities) {
+  return (capabilities & (V4L2_CAP_VIDEO_M2M | V4L2_CAP_VIDEO_M2M_MPLANE)) != 0;
+}
+
 bool queryCapabilities(V4l2Io& io, int fd, V4l2NodeInfo& info) {
   v4l2_capability capability{};
   if (xioctl(io, fd, VIDIOC_QUERYCAP, &capability) != 0) return false;

@@ -21,6 +21,9 @@ struct V4l2NodeInfo {
   std::uint32_t capabilities = 0;  // the node's own (device_caps when the driver reports them)
 };
 
+// True for a memory-to-memory node (single- or multi-planar): a codec or a converter, never a camera.
+bool isMemoryToMemory(std::uint32_t capabilities);
+
 // One entry of VIDIOC_ENUM_FMT.
 struct V4l2FormatDesc {
   std::uint32_t fourcc = 0;
