@@ -7,7 +7,6 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <span>
-#include <string_view>
 #include <utility>
 #include <vector>
 
