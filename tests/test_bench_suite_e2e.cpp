@@ -319,7 +319,8 @@ TEST_CASE("the shipped default suite: every cell filled, sizes rise with bitrate
     CHECK_MESSAGE(row[column("status")] == "ok", row[column("id")] << ": " << row[column("reason")]);
     bytes[row[column("sequence")]][row[column("bitrate")]] = std::stol(row[column("video_bytes")]);
   }
-  for (const auto& [sequence, sizes] : bytes) {
+  for (const auto& [sequence_name, sizes] : bytes) {
+    const std::string& sequence = sequence_name;  // CAPTURE takes it by reference: clang 14 needs a variable
     CAPTURE(sequence);
     REQUIRE(sizes.size() == bitrates.size());
     for (std::size_t i = 1; i < bitrates.size(); ++i) CHECK(sizes.at(bitrates[i]) > sizes.at(bitrates[i - 1]));

@@ -426,7 +426,8 @@ TEST_CASE("number options say what they expect: no 309-digit bound, text that is
       {"bench frontend --frames -1", "--frames: expected a number of 0 or more, got -1"},
       {"bench pipeline --frames -1", "--frames: expected a number of 0 or more, got -1"},
   };
-  for (const auto& [args, message] : cases) {
+  for (const auto& [command_line, message] : cases) {
+    const std::string& args = command_line;  // INFO captures it, which clang 14 allows only for a variable
     const voca::test::CommandOutput result = runVocaOutput(args);
     INFO(args);
     INFO(result.text);
@@ -444,7 +445,8 @@ TEST_CASE("number options say what they expect: no 309-digit bound, text that is
        "--est " + dir.path().string() + ": a folder, not a file"},
       {eval + " --est-times " + (dir / "times.txt").string(), "--est-times " + (dir / "times.txt").string()},
   };
-  for (const auto& [args, message] : missing) {
+  for (const auto& [command_line, message] : missing) {
+    const std::string& args = command_line;  // INFO captures it, which clang 14 allows only for a variable
     const voca::test::CommandOutput result = runVocaOutput(args);
     INFO(args);
     INFO(result.text);

@@ -71,7 +71,9 @@ void expectSameTrajectory(const std::string& name, pipeline::VoRunOptions option
   test::ScratchDir dir("pipeline-determinism");
   std::string reference;
   const std::pair<int, int> layouts[] = {{1, 1}, {2, 2}, {0, 1}, {0, 2}};  // threads, frontend camera threads
-  for (const auto& [threads, camera_threads] : layouts) {
+  for (const auto& layout : layouts) {
+    const int threads = layout.first;  // variables, not bindings: INFO captures them (clang 14)
+    const int camera_threads = layout.second;
     options.trajectory_file = dir / ("traj_" + std::to_string(threads) + "_" + std::to_string(camera_threads) + ".txt");
     options.pipeline_options.threads = threads;
     options.frontend_camera_threads = camera_threads;

@@ -110,6 +110,12 @@ def read_server_frame(sock):
     return first & 0x0F, exactly(n)
 
 
+# The live rate the runs replay at, as a factor of the recording's. Equal trajectories need runs that
+# keep up without dropping frames: a sanitizer build, several times slower, replays slower
+# (VOCA_TEST_REPLAY_SPEED, set by tests/view.cmake).
+SPEED = os.environ.get("VOCA_TEST_REPLAY_SPEED", "1")
+
+
 class ViewTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -118,7 +124,7 @@ class ViewTest(unittest.TestCase):
         cls.dir = pathlib.Path(cls.tmp.name)
         # The reference: the same input without --view, at the same live rate.
         cls.plain = cls.dir / "plain.txt"
-        plain = view_support.Run([VOCA, "run", str(cls.video), "-o", str(cls.plain), "--realtime"])
+        plain = view_support.Run([VOCA, "run", str(cls.video), "-o", str(cls.plain), "--realtime", "--speed", SPEED])
         assert plain.finish() == 0, plain.stderr()
         cls.plain_seconds = plain.seconds
         cls.plain_peak_rss_kb = plain.peak_rss_kb
@@ -129,7 +135,7 @@ class ViewTest(unittest.TestCase):
 
     def start(self, name, *extra):
         trajectory = self.dir / f"{name}.txt"
-        run = view_support.Run([VOCA, "run", str(self.video), "-o", str(trajectory), "--realtime",
+        run = view_support.Run([VOCA, "run", str(self.video), "-o", str(trajectory), "--realtime", "--speed", SPEED,
                                 "--view", "127.0.0.1:0", *extra])
         run.wait_port()
         return run, trajectory

@@ -30,9 +30,15 @@ GROUND_TRUTH = DATA / "trajectories" / "euroc_V1_01_easy.txt"  # the clip is V1_
 VOCA = Path(os.environ.get("VOCA_BIN", ROOT / "build" / "release" / "bin" / "voca"))
 FRAMES = 40  # a short run: 2 s of the clip, enough for keyframes and the RTE's 6-frame delta
 
+# In the ASan build the interpreter runs with the sanitizer's shared runtime preloaded; the `voca`
+# executable carries its own copy, so it must not inherit the preload.
+CLI_ENV = {name: value for name, value in os.environ.items() if name != "LD_PRELOAD"}
+
+
 def run_cli(*args):
     """Runs `voca ARGS`; the completed process (output as text)."""
-    return subprocess.run([str(VOCA), *map(str, args)], capture_output=True, text=True, check=False)
+    return subprocess.run([str(VOCA), *map(str, args)], capture_output=True, text=True, check=False,
+                          env=CLI_ENV)
 
 
 def cli_error(*args):
