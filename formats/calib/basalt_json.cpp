@@ -38,25 +38,25 @@ const char* typeName(const json& j) {
 }
 
 // A JSON value with its dotted path, so every error names the file and the field.
-class Field {
+class JsonField {
  public:
-  Field(const json& value, std::string path, const std::string& file)
+  JsonField(const json& value, std::string path, const std::string& file)
       : value_(value), path_(std::move(path)), file_(file) {}
 
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError((path_.empty() ? file_ : file_ + ": " + path_) + ": " + what);
   }
 
-  Field operator[](const char* key) const {
+  JsonField operator[](const char* key) const {
     if (!value_.is_object()) fail(std::string("expected an object, got ") + typeName(value_));
     const auto it = value_.find(key);
     const std::string path = path_.empty() ? key : path_ + "." + key;
-    if (it == value_.end()) Field(value_, path, file_).fail("missing");
-    return Field(*it, path, file_);
+    if (it == value_.end()) JsonField(value_, path, file_).fail("missing");
+    return JsonField(*it, path, file_);
   }
-  Field at(size_t index) const {
+  JsonField at(size_t index) const {
     if (index >= size()) fail("missing element " + std::to_string(index));
-    return Field(value_[index], path_ + "[" + std::to_string(index) + "]", file_);
+    return JsonField(value_[index], path_ + "[" + std::to_string(index) + "]", file_);
   }
   size_t size() const {
     if (!value_.is_array()) fail(std::string("expected an array, got ") + typeName(value_));
@@ -103,8 +103,8 @@ std::span<const char* const> paramNamesOf(std::string_view type) {
   return names;
 }
 
-GenericCamera<double> readCamera(const Field& entry) {
-  const Field type_field = entry["camera_type"];
+GenericCamera<double> readCamera(const JsonField& entry) {
+  const JsonField type_field = entry["camera_type"];
   const std::string type = type_field.string();
   const std::span<const char* const> names = paramNamesOf(type);
   if (names.empty()) {
@@ -115,7 +115,7 @@ GenericCamera<double> readCamera(const Field& entry) {
     }
     type_field.fail("unknown camera type '" + type + "' (supported: " + supported + ")");
   }
-  const Field intrinsics = entry["intrinsics"];
+  const JsonField intrinsics = entry["intrinsics"];
   std::vector<double> params;
   for (const char* name : names) params.push_back(intrinsics[name].number());
   // Unknown keys are usually typos of a parameter that then silently took no effect.
@@ -141,7 +141,7 @@ GenericCamera<double> readCamera(const Field& entry) {
   }
 }
 
-SE3d readPose(const Field& pose) {
+SE3d readPose(const JsonField& pose) {
   Eigen::Vector3d p(pose["px"].number(), pose["py"].number(), pose["pz"].number());
   Eigen::Quaterniond q(pose["qw"].number(), pose["qx"].number(), pose["qy"].number(), pose["qz"].number());
   // Files store unit quaternions to ~16 digits; a norm off by more than 1e-3 is a wrong value, not rounding.
@@ -166,10 +166,10 @@ StereoRig loadBasaltCalibration(const fs::path& json_file) {
   } catch (const json::exception& e) {
     throw InputError(file + ": malformed JSON: " + e.what());
   }
-  const Field value0 = Field(root, "", file)["value0"];
-  const Field poses = value0["T_imu_cam"];
-  const Field intrinsics = value0["intrinsics"];
-  const Field resolution = value0["resolution"];
+  const JsonField value0 = JsonField(root, "", file)["value0"];
+  const JsonField poses = value0["T_imu_cam"];
+  const JsonField intrinsics = value0["intrinsics"];
+  const JsonField resolution = value0["resolution"];
   const size_t count = intrinsics.size();
   if (count < calib_internal::kMinCameras) {
     intrinsics.fail("a stereo rig needs at least 2 cameras, got " + std::to_string(count));
@@ -185,7 +185,7 @@ StereoRig loadBasaltCalibration(const fs::path& json_file) {
   rig.source = file;
   rig.body_frame = "imu";
   for (size_t i = 0; i < count; ++i) {
-    const Field size = resolution.at(i);
+    const JsonField size = resolution.at(i);
     if (size.size() != 2) size.fail("expected [width, height]");
     rig.cameras.push_back(
         {readCamera(intrinsics.at(i)), size.at(0).imageSide(), size.at(1).imageSide(), readPose(poses.at(i))});

@@ -18,9 +18,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // A YAML node with its dotted path, so every error names the file, the field and the line.
-class Field {
+class YamlField {
  public:
-  Field(YAML::Node node, std::string path, const std::string& file)
+  YamlField(YAML::Node node, std::string path, const std::string& file)
       : node_(std::move(node)), path_(std::move(path)), file_(file) {}
 
   [[noreturn]] void fail(const std::string& what) const {
@@ -30,7 +30,7 @@ class Field {
   }
 
   bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
-  Field operator[](const std::string& key) const {
+  YamlField operator[](const std::string& key) const {
     if (!node_.IsMap()) fail("expected a map of fields, got " + describe());
     const YAML::Node child = node_[key];
     const std::string path = path_.empty() ? key : path_ + "." + key;
@@ -40,7 +40,7 @@ class Field {
         where += " (in the map starting at line " + std::to_string(node_.Mark().line + 1) + ")";
       throw InputError(where);
     }
-    return Field(child, path, file_);
+    return YamlField(child, path, file_);
   }
   // Parsed with std::from_chars: yaml-cpp's as<double> goes through a stringstream, which follows
   // the global C++ locale (a decimal comma would misread "0.5").
@@ -66,7 +66,7 @@ class Field {
     }
     std::vector<double> values;
     for (size_t i = 0; i < node_.size(); ++i) {
-      values.push_back(Field(node_[i], path_ + "[" + std::to_string(i) + "]", file_).number());
+      values.push_back(YamlField(node_[i], path_ + "[" + std::to_string(i) + "]", file_).number());
     }
     return values;
   }
@@ -75,7 +75,7 @@ class Field {
     if (!node_.IsSequence() || node_.size() != 4) fail("expected 4 rows of 4 numbers, got " + describe());
     Eigen::Matrix4d m;
     for (int r = 0; r < 4; ++r) {
-      const std::vector<double> row = Field(node_[r], path_ + "[" + std::to_string(r) + "]", file_).numbers(4);
+      const std::vector<double> row = YamlField(node_[r], path_ + "[" + std::to_string(r) + "]", file_).numbers(4);
       for (int c = 0; c < 4; ++c) m(r, c) = row[static_cast<size_t>(c)];
     }
     return m;
@@ -120,7 +120,7 @@ YAML::Node loadYaml(const fs::path& path) {
 }
 
 // Kalibr models beyond pinhole: ds and eucm store their two shape parameters first.
-GenericCamera<double> kalibrCamera(const Field& cam) {
+GenericCamera<double> kalibrCamera(const YamlField& cam) {
   const std::string model = cam["camera_model"].string();
   const std::string distortion = cam.has("distortion_model") ? cam["distortion_model"].string() : "none";
   const std::vector<double> intrinsics = cam["intrinsics"].numbers();
@@ -142,28 +142,28 @@ GenericCamera<double> kalibrCamera(const Field& cam) {
 
 StereoRig loadKalibrCalibration(const fs::path& camchain_yaml) {
   const std::string file = camchain_yaml.string();
-  const Field root(loadYaml(camchain_yaml), "", file);
+  const YamlField root(loadYaml(camchain_yaml), "", file);
   StereoRig rig;
   rig.source = file;
   // cam0 decides the body frame: the IMU when it has IMU extrinsics, else cam0 itself.
   const bool imu_body = root["cam0"].has("T_cam_imu") || root["cam0"].has("T_imu_cam");
   rig.body_frame = imu_body ? "imu" : "cam0";
   for (int index = 0; root.has("cam" + std::to_string(index)); ++index) {
-    const Field cam = root["cam" + std::to_string(index)];
+    const YamlField cam = root["cam" + std::to_string(index)];
     const GenericCamera<double> camera = kalibrCamera(cam);
     const auto [width, height] = cam["resolution"].resolution();
     SE3d T_body_cam;
     if (imu_body && cam.has("T_cam_imu")) {
-      const Field t = cam["T_cam_imu"];
+      const YamlField t = cam["T_cam_imu"];
       T_body_cam = t.rigid(t.matrix4()).inverse();
     } else if (imu_body && cam.has("T_imu_cam")) {
-      const Field t = cam["T_imu_cam"];
+      const YamlField t = cam["T_imu_cam"];
       T_body_cam = t.rigid(t.matrix4());
     } else if (index > 0) {
       if (!cam.has("T_cn_cnm1")) {
         cam["T_cn_cnm1"].fail(imu_body ? "missing (needed when T_cam_imu is absent)" : "missing");
       }
-      const Field t = cam["T_cn_cnm1"];
+      const YamlField t = cam["T_cn_cnm1"];
       const SE3d T_cn_cnm1 = t.rigid(t.matrix4());
       T_body_cam = rig.cameras.back().T_body_cam * T_cn_cnm1.inverse();
     }
@@ -188,11 +188,11 @@ StereoRig loadEurocSensorCalibration(const fs::path& mav0_folder) {
       break;
     }
     const std::string file = sensor.string();
-    const Field root(loadYaml(sensor), "", file);
-    const Field t_bs = root["T_BS"];
+    const YamlField root(loadYaml(sensor), "", file);
+    const YamlField t_bs = root["T_BS"];
     if (t_bs.has("rows") && t_bs["rows"].number() != 4) t_bs["rows"].fail("expected 4");
     if (t_bs.has("cols") && t_bs["cols"].number() != 4) t_bs["cols"].fail("expected 4");
-    const Field data = t_bs["data"];
+    const YamlField data = t_bs["data"];
     const std::vector<double> values = data.numbers(16);
     const Eigen::Matrix4d m = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(values.data());
     const SE3d T_body_cam = data.rigid(m);

@@ -12,8 +12,6 @@ namespace voca::pipeline {
 
 namespace {
 
-constexpr auto ms = platform::nsToMs;
-
 const StageReport* findStage(const RunReport& report, std::string_view name) {
   for (const StageReport& s : report.stages) {
     if (s.name == name) return &s;
@@ -65,9 +63,9 @@ std::string formatRunSummary(const VoRunResult& r) {
         out,
         "ms per frame: frontend median {:.2f} (mean {:.2f}, p99 {:.2f}), backend median {:.2f} (mean {:.2f}, "
         "p99 {:.2f})\n",
-        ms(frontend->service.quantileNs(0.5)), frontend->service.meanNs() * 1e-6,
-        ms(frontend->service.quantileNs(0.99)), ms(backend->service.quantileNs(0.5)), backend->service.meanNs() * 1e-6,
-        ms(backend->service.quantileNs(0.99)));
+        platform::nsToMs(frontend->service.quantileNs(0.5)), frontend->service.meanNs() * 1e-6,
+        platform::nsToMs(frontend->service.quantileNs(0.99)), platform::nsToMs(backend->service.quantileNs(0.5)),
+        backend->service.meanNs() * 1e-6, platform::nsToMs(backend->service.quantileNs(0.99)));
   }
   if (r.started) {
     fmt::format_to(out, "pipeline: {} thread{}{}, {:.1f} frames/s ({:.2f} s)\n", r.pipeline_report.threads,
@@ -181,8 +179,8 @@ std::string formatTrackSummary(const VoRunResult& r, const FrontendConfig& confi
         out,
         "time per stereo frame: wall median {:.2f} ms, p99 {:.2f} ms; thread CPU median {:.2f} ms, p99 {:.2f} "
         "ms\n",
-        ms(frontend->service.quantileNs(0.5)), ms(frontend->service.quantileNs(0.99)),
-        ms(frontend->cpu.quantileNs(0.5)), ms(frontend->cpu.quantileNs(0.99)));
+        platform::nsToMs(frontend->service.quantileNs(0.5)), platform::nsToMs(frontend->service.quantileNs(0.99)),
+        platform::nsToMs(frontend->cpu.quantileNs(0.5)), platform::nsToMs(frontend->cpu.quantileNs(0.99)));
   }
   return text;
 }

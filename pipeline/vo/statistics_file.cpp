@@ -14,18 +14,12 @@ namespace voca::pipeline {
 
 namespace {
 
-constexpr auto ms = platform::nsToMs;
-
-}  // namespace
-
-namespace {
-
 nlohmann::json histogramJson(const LatencyHistogram& h) {
   return {{"count", h.count()},
-          {"p50_ms", ms(h.quantileNs(0.5))},
-          {"p90_ms", ms(h.quantileNs(0.9))},
-          {"p99_ms", ms(h.quantileNs(0.99))},
-          {"max_ms", ms(h.maxNs())},
+          {"p50_ms", platform::nsToMs(h.quantileNs(0.5))},
+          {"p90_ms", platform::nsToMs(h.quantileNs(0.9))},
+          {"p99_ms", platform::nsToMs(h.quantileNs(0.99))},
+          {"max_ms", platform::nsToMs(h.maxNs())},
           {"mean_ms", h.meanNs() * 1e-6}};
 }
 

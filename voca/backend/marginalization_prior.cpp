@@ -6,14 +6,6 @@
 
 namespace voca::backend {
 
-namespace {
-
-// Regularisation of blocks that are inverted without damping; far below any real information (a
-// 1 px error at 1 m gives about 1e5 on the pose diagonal).
-constexpr double kTinyRegularization = 1e-9;
-
-}  // namespace
-
 void MarginalizationPrior::clear() {
   H_.setZero();
   g_.setZero();

@@ -18,9 +18,6 @@ namespace {
 // A landmark whose outlier observations leave fewer than this many is dropped as a whole
 // (Basalt's filterOutliers(threshold, 4)): with so few views the remaining ones are suspect too.
 constexpr int kFilterMinObservations = 4;
-// Regularisation of blocks that are inverted without damping (marginalisation); far below any
-// real information (a 1 px error at 1 m gives about 1e5 on the pose diagonal).
-constexpr double kTinyRegularization = 1e-9;
 // The pose step ends after a step shorter than this (metres and radians, as one norm). Its Huber
 // reweighting converges about tenfold per iteration, so what is left after such a step is ~1e-6:
 // a hundredth of a pixel at a 1000 px focal length and 1 m, and the window optimisation that
