@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The test suite as CI runs it: install packages; build Release and run the fast unit tests first,
-# then the end-to-end tests and the install checks; the bad-input tests again with AddressSanitizer +
-# UBSan; the threaded runtime tests with ThreadSanitizer; every input parser under libFuzzer (from
-# the ASan build); and, in CI, the aarch64 cross build with its unit tests under qemu.
+# then the end-to-end tests and the install checks; every unit test and the bad-input tests again
+# with AddressSanitizer + UBSan; every test that runs threads of ours with ThreadSanitizer; every
+# input parser under libFuzzer (from the ASan build); and, in CI, the aarch64 cross build with its
+# unit tests under qemu.
 #
 # Environment: VOCA_SANITIZERS=0 skips the ASan and TSan stages, VOCA_FUZZ_SECONDS=0 the fuzz stage,
 # VOCA_CROSS=0/1 the cross stage (default: on when CI=true).
@@ -60,22 +61,25 @@ bash tools/check_install.sh release
 stage_done "install, consumers, amd64 package"
 
 if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
-  # AddressSanitizer + UBSan (clang; a report aborts the test): the bad-input tests (label asan) and
-  # the fuzzers, from one build. `ctest --preset asan` runs every test there.
+  # AddressSanitizer + UBSan (clang; a report aborts the test): every unit test and the bad-input
+  # tests (label asan), and the fuzzers, from one build. The end-to-end tests run five to seven
+  # times slower under ASan (they render and track whole sequences), so CI leaves them to
+  # `ctest --preset asan`, which runs every test.
   cmake --preset asan >/dev/null
-  mapfile -t asan_tests < <(preset_tests asan -L asan)
+  mapfile -t asan_tests < <(preset_tests asan -L 'unit|asan')
   cmake --build --preset asan --target fuzzers $(existing_targets asan "${asan_tests[@]}")
-  stage_done "asan build (bad-input tests, fuzzers)"
-  ctest --preset asan -L asan
-  stage_done "asan tests (label asan)"
-  # ThreadSanitizer: the threaded tests of the runtime, the decode stage, the view server and the
-  # ROS 2 sink, and what they run. `ctest --preset tsan` runs every test labelled threads.
+  stage_done "asan build (unit and bad-input tests, fuzzers)"
+  ctest --preset asan -L 'unit|asan'
+  stage_done "asan tests (labels unit, asan)"
+  # ThreadSanitizer: every test labelled threads (the runtime, the decode stage, the pipeline with
+  # its thread layouts and SIGINT, live replay with drops, the network source with loss, the fake
+  # camera, the API, the view server and the ROS 2 sink), with the voca tool some of them run.
   cmake --preset tsan >/dev/null
-  tsan_tests=(test_pipeline_runtime test_decode_stage test_view_server test_ros2)
-  cmake --build --preset tsan --target "${tsan_tests[@]}"
-  stage_done "tsan build (threaded runtime tests)"
-  ctest --preset tsan -R "^($(IFS='|'; echo "${tsan_tests[*]}"))\$"
-  stage_done "tsan tests"
+  mapfile -t tsan_tests < <(preset_tests tsan)
+  cmake --build --preset tsan --target voca $(existing_targets tsan "${tsan_tests[@]}")
+  stage_done "tsan build (tests labelled threads)"
+  ctest --preset tsan
+  stage_done "tsan tests (label threads)"
 fi
 
 # Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
