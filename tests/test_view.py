@@ -124,7 +124,8 @@ class ViewTest(unittest.TestCase):
         cls.dir = pathlib.Path(cls.tmp.name)
         # The reference: the same input without --view, at the same live rate.
         cls.plain = cls.dir / "plain.txt"
-        plain = view_support.Run([VOCA, "run", str(cls.video), "-o", str(cls.plain), "--realtime", "--speed", SPEED])
+        plain = view_support.Run([VOCA, "run", str(cls.video), "-o", str(cls.plain), "--realtime", "--speed",
+                                  SPEED])
         assert plain.finish() == 0, plain.stderr()
         cls.plain_seconds = plain.seconds
         cls.plain_peak_rss_kb = plain.peak_rss_kb
@@ -133,10 +134,11 @@ class ViewTest(unittest.TestCase):
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
-    def start(self, name, *extra):
+    def start(self, name, *extra, speed=1.0):
+        """A --view run at `speed` times the live rate of the reference run."""
         trajectory = self.dir / f"{name}.txt"
-        run = view_support.Run([VOCA, "run", str(self.video), "-o", str(trajectory), "--realtime", "--speed", SPEED,
-                                "--view", "127.0.0.1:0", *extra])
+        run = view_support.Run([VOCA, "run", str(self.video), "-o", str(trajectory), "--realtime",
+                                "--speed", str(float(SPEED) * speed), "--view", "127.0.0.1:0", *extra])
         run.wait_port()
         return run, trajectory
 
@@ -356,7 +358,7 @@ class ViewTest(unittest.TestCase):
 
     def test_slow_client_never_reads(self):
         # Half speed: 8 s of images at 30 Hz, far more than the server holds back for one client.
-        run, trajectory = self.start("slow", "--speed", "0.5")
+        run, trajectory = self.start("slow", speed=0.5)
         sock = handshake(run.port, rcvbuf=4096)
         read_server_frame(sock)  # serverInfo
         _, advertise = read_server_frame(sock)
@@ -379,8 +381,11 @@ class ViewTest(unittest.TestCase):
         self.assertLess(run.seconds, 2 * self.plain_seconds + 4.0)
         # Bounded: the server holds back at most 4 MiB of messages per client, and as much again in the batch
         # it is writing when the client stops reading; the rest is the messages' own overhead and the ring.
+        # ASan keeps freed blocks in quarantine instead of reusing them, so there peak memory follows how
+        # much was allocated, not how much is held.
         growth_mb = (run.peak_rss_kb - self.plain_peak_rss_kb) / 1024
-        self.assertLess(growth_mb, 32, f"the peak memory grew by {growth_mb:.0f} MB with a client that never reads")
+        if os.environ.get("VOCA_TEST_SANITIZER") != "address":
+            self.assertLess(growth_mb, 32, f"the peak memory grew by {growth_mb:.0f} MB with a client that never reads")
 
 
 if __name__ == "__main__":

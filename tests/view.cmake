@@ -24,6 +24,6 @@ set_tests_properties(test_view test_view_page PROPERTIES LABELS e2e SKIP_RETURN_
 voca_test_timeout(test_view 600)
 if(VOCA_SANITIZE)
   # Five to seven times slower: at the recording's rate the frontend would fall behind and drop frames.
-  set_tests_properties(test_view PROPERTIES ENVIRONMENT VOCA_TEST_REPLAY_SPEED=0.2)
+  set_tests_properties(test_view PROPERTIES ENVIRONMENT "VOCA_TEST_REPLAY_SPEED=0.2;VOCA_TEST_SANITIZER=${VOCA_SANITIZE}")
 endif()
 voca_test_timeout(test_view_page 600)
