@@ -15,31 +15,29 @@ inline const bool kOperatorNewCountingInstalled = (g_operator_new_counted.store(
 // Exported: the project builds with hidden visibility, and shared libraries loaded later must call
 // these too.
 #pragma GCC visibility push(default)
-void* operator new(std::size_t size) {
-  voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
-  const std::size_t a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-// The nothrow forms too (std::stable_sort's buffer uses one): a runtime that provides its own, like a
-// sanitizer's, would otherwise allocate what the replaced delete below frees with std::free.
+// Every form counts once and allocates in one of the two nothrow forms; the nothrow forms are replaced
+// too (std::stable_sort's buffer uses one), since a runtime that provides its own, like a sanitizer's,
+// would otherwise allocate what the replaced delete below frees with std::free.
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
   return std::malloc(size == 0 ? 1 : size);
 }
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
 void* operator new(std::size_t size, std::align_val_t align, const std::nothrow_t&) noexcept {
   voca::platform::g_operator_new_calls.fetch_add(1, std::memory_order_relaxed);
   const std::size_t a = static_cast<std::size_t>(align);
   return std::aligned_alloc(a, (size + a - 1) / a * a);
 }
+void* operator new(std::size_t size) {
+  if (void* p = operator new(size, std::nothrow)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t align) {
+  if (void* p = operator new(size, align, std::nothrow)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
 void* operator new[](std::size_t size, std::align_val_t align, const std::nothrow_t& tag) noexcept {
   return operator new(size, align, tag);
 }
