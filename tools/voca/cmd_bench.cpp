@@ -45,7 +45,7 @@ const std::vector<BenchMode>& benchModes() {
   return modes;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool bench_command_registered = voca::cli::registerCommand({
     .name = "bench",
     .summary = "Measure throughput of pipeline stages, or run evaluation suites for the paper's tables",
     .order = 70,

@@ -222,7 +222,7 @@ int runDemo(const DemoOptions& o) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool demo_command_registered = voca::cli::registerCommand({
     .name = "demo",
     .summary = "Render, encode and track a fast synthetic sequence: baseline vs VOCA side by side",
     .order = 5,

@@ -29,7 +29,7 @@ int runDevices() {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool devices_command_registered = voca::cli::registerCommand({
     .name = "devices",
     .summary = "List the cameras (V4L2, libcamera) with their formats, sizes and frame rates",
     .order = 5,

@@ -75,7 +75,7 @@ void parseFps(const std::string& text, voca::encode::DatasetEncodeOptions& optio
 // Thrown out of the --decoded-png progress when a signal asks to stop.
 struct DecodingStopped {};
 
-std::string megabytes(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
+std::string megabytesText(std::int64_t bytes) { return fmt::format("{:.2f} MB", static_cast<double>(bytes) / 1e6); }
 
 // 20 or 29.970: a frame rate as a person reads it.
 std::string fpsText(int num, int den) {
@@ -134,7 +134,7 @@ int runEncode(const EncodeOptions& cli) {
       pass_times += fmt::format("{}pass {} {:.2f} ms/frame", p == 0 ? "" : ", ", p + 1, r.pass_ms_per_frame[p]);
     }
     fmt::print("cam{}       {}x{}, {} -> {} ({:.1f}x), achieved {:.1f} kbit/s, {} keyframe(s), encode {}\n", cam.camera,
-               r.width, r.height, megabytes(cam.input_bytes), megabytes(r.file_bytes),
+               r.width, r.height, megabytesText(cam.input_bytes), megabytesText(r.file_bytes),
                static_cast<double>(cam.input_bytes) / static_cast<double>(r.file_bytes),
                r.achieved_bitrate_bps / 1000.0, r.num_keyframes, pass_times);
   }
@@ -161,7 +161,7 @@ int runEncode(const EncodeOptions& cli) {
     }
   }
   fmt::print("total      {} -> {}: compression ratio {:.1f}x ({:.1f}x against raw 8-bit frames)\n",
-             megabytes(report.input_bytes), megabytes(report.output_bytes),
+             megabytesText(report.input_bytes), megabytesText(report.output_bytes),
              static_cast<double>(report.input_bytes) / static_cast<double>(report.output_bytes),
              static_cast<double>(report.raw_bytes) / static_cast<double>(report.output_bytes));
   if (report.ground_truth_written) fmt::print("ground truth -> {}\n", report.ground_truth_written->string());
@@ -190,7 +190,7 @@ int runEncode(const EncodeOptions& cli) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand(
+const bool encode_command_registered = voca::cli::registerCommand(
     {.name = "encode",
      .summary = "Encode a stereo dataset into the VOCA video layout (one H.264 .mp4 per camera)",
      .order = 20,

@@ -148,7 +148,7 @@ int runEval(const EvalCommandOptions& cli) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand(
+const bool eval_command_registered = voca::cli::registerCommand(
     {.name = "eval",
      .summary = "ATE and RTE of an estimated trajectory against ground truth (evo-compatible)",
      .order = 60,

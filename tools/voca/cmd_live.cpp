@@ -60,7 +60,7 @@ int runLive(const LiveOptions& o) {
   return voca::cli::reportRunEnd(summary, o.pipeline, "live");
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool live_command_registered = voca::cli::registerCommand({
     .name = "live",
     .summary = "Run the stereo VO live on cameras (V4L2, libcamera), writing the trajectory as it is estimated",
     .order = 52,

@@ -190,7 +190,7 @@ int runMv(const MvOptions& opts) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool mv_command_registered = voca::cli::registerCommand({
     .name = "mv",
     .summary = "Render the codec's motion vectors and block partitions (outliers highlighted)",
     .order = 30,

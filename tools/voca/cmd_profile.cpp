@@ -12,7 +12,7 @@ namespace {
 
 using voca::cli::Runner;
 
-const bool registered = voca::cli::registerCommand({
+const bool profile_command_registered = voca::cli::registerCommand({
     .name = "profile",
     .summary = "Summarise a saved latency trace (--trace) per stage: p50/p90/p99/max, queues, drops",
     .order = 75,

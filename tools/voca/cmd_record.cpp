@@ -66,7 +66,7 @@ int runRecord(const RecordCli& o) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool record_command_registered = voca::cli::registerCommand({
     .name = "record",
     .summary = "Record stereo cameras as H.264 into a VOCA video folder that `voca run` replays",
     .order = 22,

@@ -64,7 +64,7 @@ int runRun(const RunOptions& o) {
   return voca::cli::reportRunEnd(summary, o.pipeline, "run");
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool run_command_registered = voca::cli::registerCommand({
     .name = "run",
     .summary = "Run the stereo VO (frontend + backend) on a dataset or video and write the trajectory",
     .order = 50,

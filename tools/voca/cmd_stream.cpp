@@ -39,7 +39,7 @@ int runStreamCommand(const StreamCli& o) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool stream_command_registered = voca::cli::registerCommand({
     .name = "stream",
     .summary = "Send a stereo dataset, encoded live at its own rate, over the network (MPEG-TS)",
     .order = 45,

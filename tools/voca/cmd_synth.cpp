@@ -41,7 +41,7 @@ int runSynth(voca::pipeline::SynthOptions options) {
   return 0;
 }
 
-const bool registered = voca::cli::registerCommand(
+const bool synth_command_registered = voca::cli::registerCommand(
     {.name = "synth",
      .summary = "Render a synthetic stereo sequence with exact ground truth (EuRoC folder + calib.json)",
      .order = 10,

@@ -60,7 +60,7 @@ int runTrack(const TrackOptions& opts) {
   return voca::cli::reportRunEnd(result, opts.pipeline, "track");
 }
 
-const bool registered = voca::cli::registerCommand({
+const bool track_command_registered = voca::cli::registerCommand({
     .name = "track",
     .summary = "Run the KLT frontend alone on a dataset or video and summarise its tracks",
     .order = 40,
