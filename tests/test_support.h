@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 
 #include <signal.h>
 #include <spawn.h>
@@ -34,6 +35,11 @@ inline int& sharedDataSkips() {
 
 // The exit code CTest reads as "skipped" (SKIP_RETURN_CODE in tests/CMakeLists.txt).
 inline constexpr int kSkipReturnCode = 77;
+
+// The sanitizer this build is instrumented with: "address" (ASan + UBSan), "thread" or "" (none).
+// Sanitized code runs 5-15x slower; long checks that are about threads or memory, not numbers, may
+// run on a shorter input there.
+inline constexpr std::string_view kSanitizer = VOCA_TEST_SANITIZER;
 
 // True when running in CI, where ../shared/data is always present and its absence is a failure.
 inline bool runningInCi() {
