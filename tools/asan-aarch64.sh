@@ -39,16 +39,12 @@ cmake -S . -B "$build" -G Ninja --toolchain toolchains/aarch64-linux-gnu.cmake -
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   -DVOCA_SANITIZE=address "${launcher[@]}" >/dev/null
 
+source tools/test_targets.sh
 tests=("$@")
 if [ ${#tests[@]} -eq 0 ]; then
-  mapfile -t tests < <(ctest --test-dir "$build" -N -L unit -LE noemu | sed -n 's/^ *Test *#[0-9]*: *//p')
+  mapfile -t tests < <(test_names --test-dir "$build" -L unit -LE noemu)
 fi
-# Script tests name no target; they build with what they run.
-all_targets=$(ninja -C "$build" -t targets all | sed 's/: .*//')
-targets=()
-for name in "${tests[@]}"; do
-  if grep -qx "$name" <<<"$all_targets"; then targets+=("$name"); fi
-done
+mapfile -t targets < <(build_targets "$build" "${tests[@]}")
 cmake --build "$build" --target "${targets[@]}"
 
 regex="^($(IFS='|'; echo "${tests[*]}"))\$"

@@ -24,29 +24,15 @@ print_stage_times() {
 }
 trap print_stage_times EXIT
 
-# The tests a preset's filter selects (CTest test names are their target names, except tests that
-# run a script: those name no target and build with what they run).
-preset_tests() {
-  ctest --preset "$1" -N "${@:2}" | sed -n 's/^ *Test *#[0-9]*: *//p'
-}
-# The subset of names that are build targets of the preset's tree.
-existing_targets() {
-  local preset=$1
-  shift
-  local all
-  all=$(ninja -C "build/$preset" -t targets all | sed 's/: .*//')
-  for name in "$@"; do
-    if grep -qx "$name" <<<"$all"; then echo "$name"; fi
-  done
-}
+source tools/test_targets.sh
 
 bash tools/setup.sh
 stage_done "setup (packages)"
 
 # Release: the unit tests first, so a broken build or unit fails within minutes.
 cmake --preset release
-mapfile -t unit_tests < <(preset_tests release -L unit)
-cmake --build --preset release --target $(existing_targets release "${unit_tests[@]}")
+mapfile -t unit_tests < <(test_names --preset release -L unit)
+cmake --build --preset release --target $(build_targets build/release "${unit_tests[@]}")
 stage_done "release build (unit tests)"
 ctest --preset release -L unit
 stage_done "release unit tests"
@@ -66,8 +52,8 @@ if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
   # times slower under ASan (they render and track whole sequences), so CI leaves them to
   # `ctest --preset asan`, which runs every test.
   cmake --preset asan >/dev/null
-  mapfile -t asan_tests < <(preset_tests asan -L 'unit|asan')
-  cmake --build --preset asan --target fuzzers $(existing_targets asan "${asan_tests[@]}")
+  mapfile -t asan_tests < <(test_names --preset asan -L 'unit|asan')
+  cmake --build --preset asan --target fuzzers $(build_targets build/asan "${asan_tests[@]}")
   stage_done "asan build (unit and bad-input tests, fuzzers)"
   ctest --preset asan -L 'unit|asan'
   stage_done "asan tests (labels unit, asan)"
@@ -75,8 +61,8 @@ if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
   # its thread layouts and SIGINT, live replay with drops, the network source with loss, the fake
   # camera, the API, the view server and the ROS 2 sink), with the voca tool some of them run.
   cmake --preset tsan >/dev/null
-  mapfile -t tsan_tests < <(preset_tests tsan)
-  cmake --build --preset tsan --target voca $(existing_targets tsan "${tsan_tests[@]}")
+  mapfile -t tsan_tests < <(test_names --preset tsan)
+  cmake --build --preset tsan --target voca $(build_targets build/tsan "${tsan_tests[@]}")
   stage_done "tsan build (tests labelled threads)"
   ctest --preset tsan
   stage_done "tsan tests (label threads)"
@@ -98,8 +84,8 @@ fi
 if [ "${VOCA_CROSS:-$([ "${CI:-}" = true ] && echo 1 || echo 0)}" = 1 ]; then
   bash tools/cross-setup.sh aarch64
   cmake --preset aarch64
-  mapfile -t cross_tests < <(preset_tests aarch64)
-  cmake --build --preset aarch64 --target voca voca_rt $(existing_targets aarch64 "${cross_tests[@]}")
+  mapfile -t cross_tests < <(test_names --preset aarch64)
+  cmake --build --preset aarch64 --target voca voca_rt $(build_targets build/aarch64 "${cross_tests[@]}")
   stage_done "cross build"
   ctest --preset aarch64
   stage_done "cross emulated unit tests"
