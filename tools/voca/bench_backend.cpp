@@ -2,6 +2,7 @@
 // the frontend's real tracks of a moving sequence (default) or on synthetic observations.
 
 #include "tools/voca/bench_backend.h"
+#include "tools/voca/bench_budget.h"
 
 #include <fmt/core.h>
 #include <fmt/format.h>
@@ -60,7 +61,7 @@ void printTiming(const pipeline::EstimatorTiming& t) {
              t.run_median_ms.size() > 1 ? fmt::format(" (each frame's median of {} runs)", t.run_median_ms.size()) : "",
              median, quantile(t.cpu_ms, 0.9), p99, quantile(t.cpu_ms, 1.0));
   if (t.run_median_ms.size() > 1) fmt::print("  each run's own median: {:.3f} ms\n", fmt::join(t.run_median_ms, ", "));
-  const char* verdict = median > kBackendTargetMedianMs ? "missed" : p99 > 2.0 * median ? "missed (p99)" : "met";
+  const char* verdict = budgetVerdict(median, p99, kBackendTargetMedianMs);
   fmt::print("  target per stereo frame on one core: median <= {} ms, p99 <= 2x median: {}\n", kBackendTargetMedianMs,
              verdict);
 }

@@ -2,6 +2,7 @@
 // benchmark and prints it beside the target.
 
 #include "tools/voca/bench_decode.h"
+#include "tools/voca/bench_budget.h"
 
 #include <fmt/core.h>
 
@@ -25,7 +26,7 @@ struct DecodeBenchCli {
   std::string synth = "euroc";
 };
 
-// Issue 15: decode of both cameras with motion vectors, per stereo frame on one core.
+// Decode of both cameras with motion vectors, per stereo frame on one core.
 constexpr double kDecodeTargetMedianMs = 1.0;
 
 void printResult(const pipeline::DecodeBenchOptions& opts, const pipeline::DecodeBenchResult& r) {
@@ -71,9 +72,7 @@ void printResult(const pipeline::DecodeBenchOptions& opts, const pipeline::Decod
   }
   const pipeline::DecodeVariantResult& full = r.variants[0];
   if (stereo) {
-    const char* verdict = full.median_ms > kDecodeTargetMedianMs ? "missed"
-                          : full.p99_ms > 2.0 * full.median_ms   ? "missed (p99)"
-                                                                 : "met";
+    const char* verdict = budgetVerdict(full.median_ms, full.p99_ms, kDecodeTargetMedianMs);
     fmt::print(
         "target per stereo frame on one core, full decode + MV of both cameras: median <= {} ms, p99 <= 2x "
         "median: {}\n",

@@ -1,6 +1,7 @@
 // `voca bench frontend`: the frontend alone through the pipeline runner, per prior mode.
 
 #include "tools/voca/bench_frontend.h"
+#include "tools/voca/bench_budget.h"
 
 #include "tools/voca/number_checks.h"
 #include "tools/voca/pipeline_cli.h"
@@ -111,7 +112,7 @@ int runFrontendBench(const FrontendBenchOptions& opts) {
     const pipeline::FrontendTiming& timing = outcome.timing;
     if (mode == modes.front()) fmt::print("input: {}\n", timing.description);
     const double median = quantile(timing.cpu_ms, 0.5), p99 = quantile(timing.cpu_ms, 0.99);
-    const char* verdict = median > kFrontendTargetMedianMs ? "missed" : p99 > 2.0 * median ? "missed (p99)" : "met";
+    const char* verdict = budgetVerdict(median, p99, kFrontendTargetMedianMs);
     const double mean =
         std::accumulate(timing.cpu_ms.begin(), timing.cpu_ms.end(), 0.0) / static_cast<double>(timing.cpu_ms.size());
     fmt::print("{:<16} {:9.3f} {:9.3f} {:9.3f} {:9.3f} {:10.0f} {:10.0f}  {}\n", priorModeName(mode), median, p99, mean,
