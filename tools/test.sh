@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The test suite as CI runs it: install packages; build Release and run the fast unit tests first,
-# then the end-to-end tests and the install checks; every unit test and the bad-input tests again
-# with AddressSanitizer + UBSan; every test that runs threads of ours with ThreadSanitizer; every
-# input parser under libFuzzer (from the ASan build); and, in CI, the aarch64 cross build with its
-# unit tests under qemu.
+# The test suite as CI runs it: install packages; every unit test and the bad-input tests first,
+# with AddressSanitizer + UBSan; every input parser under libFuzzer (from the ASan build); a Release
+# build with the end-to-end tests and the install checks; every test that runs threads of ours with
+# ThreadSanitizer; and, in CI, the aarch64 cross build (GCC, -O3) with its unit tests under qemu.
+# Each x86-64 unit test is built once, in the ASan tree; with VOCA_SANITIZERS=0 Release runs them.
 #
 # Environment: VOCA_SANITIZERS=0 skips the ASan and TSan stages, VOCA_FUZZ_SECONDS=0 the fuzz stage,
 # VOCA_CROSS=0/1 the cross stage (default: on when CI=true).
@@ -29,34 +29,60 @@ source tools/test_targets.sh
 bash tools/setup.sh
 stage_done "setup (packages)"
 
-# Release: the unit tests first, so a broken build or unit fails within minutes.
-cmake --preset release
-mapfile -t unit_tests < <(test_names --preset release -L unit)
-cmake --build --preset release --target $(build_targets build/release "${unit_tests[@]}")
-stage_done "release build (unit tests)"
-ctest --preset release -L unit
-stage_done "release unit tests"
-cmake --build --preset release
-stage_done "release build (the rest)"
-ctest --preset release -LE unit
-stage_done "release end-to-end tests"
-# Install stage: the installed tree (only the expected files), the CMake package and pkg-config file
-# used by programs built against it alone, the example's poses against the command line's, and the
-# amd64 Debian package (tools/check_install.sh).
-bash tools/check_install.sh release
-stage_done "install, consumers, amd64 package"
+sanitizers=${VOCA_SANITIZERS:-1}
+fuzz_seconds=${VOCA_FUZZ_SECONDS:-10}
 
-if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
-  # AddressSanitizer + UBSan (clang; a report aborts the test): every unit test and the bad-input
-  # tests (label asan), and the fuzzers, from one build. The end-to-end tests run five to seven
-  # times slower under ASan (they render and track whole sequences), so CI leaves them to
-  # `ctest --preset asan`, which runs every test.
+if [ "${sanitizers}" != 0 ]; then
+  # The unit tests first, so a broken build or unit fails within minutes, and each unit test built
+  # once for x86-64: under AddressSanitizer + UBSan (clang; a report aborts the test), together with
+  # the bad-input tests (label asan) and the fuzzers. The end-to-end tests run five to seven times
+  # slower under ASan (they render and track whole sequences), so CI runs them in Release and leaves
+  # their ASan run to `ctest --preset asan`, which runs every test.
   cmake --preset asan >/dev/null
   mapfile -t asan_tests < <(test_names --preset asan -L 'unit|asan')
   cmake --build --preset asan --target fuzzers $(build_targets build/asan "${asan_tests[@]}")
   stage_done "asan build (unit and bad-input tests, fuzzers)"
   ctest --preset asan -L 'unit|asan'
   stage_done "asan tests (labels unit, asan)"
+fi
+
+# Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
+# committed seed corpora (regression inputs included); any crash, leak or sanitizer report fails.
+# VOCA_FUZZ_SECONDS changes the time per target; 0 skips the stage.
+if [ "${fuzz_seconds}" != 0 ]; then
+  bash tools/fuzz.sh "${fuzz_seconds}"
+  stage_done "fuzz"
+fi
+
+# Release: everything a user installs, and the tests the ASan stage did not run (the end-to-end
+# tests, and the unit tests a sanitizer cannot run: test_pipeline_alloc interposes malloc). Without
+# the sanitizer stages, every test: the unit tests first.
+cmake --preset release
+if [ "${sanitizers}" != 0 ]; then
+  mapfile -t release_tests < <(test_names --preset release | grep -vxF -f <(printf '%s\n' "${asan_tests[@]}"))
+  cmake --build --preset release --target $(all_but_tests build/release) \
+    $(build_targets build/release "${release_tests[@]}")
+  stage_done "release build (all but the unit tests run under ASan)"
+  ctest --preset release -R "^($(IFS='|'; echo "${release_tests[*]}"))\$"
+  stage_done "release tests (end-to-end, release-only)"
+else
+  mapfile -t unit_tests < <(test_names --preset release -L unit)
+  cmake --build --preset release --target $(build_targets build/release "${unit_tests[@]}")
+  stage_done "release build (unit tests)"
+  ctest --preset release -L unit
+  stage_done "release unit tests"
+  cmake --build --preset release
+  stage_done "release build (the rest)"
+  ctest --preset release -LE unit
+  stage_done "release end-to-end tests"
+fi
+# Install stage: the installed tree (only the expected files), the CMake package and pkg-config file
+# used by programs built against it alone, the example's poses against the command line's, and the
+# amd64 Debian package (tools/check_install.sh).
+bash tools/check_install.sh release
+stage_done "install, consumers, amd64 package"
+
+if [ "${sanitizers}" != 0 ]; then
   # ThreadSanitizer: every test labelled threads (the runtime, the decode stage, the pipeline with
   # its thread layouts and SIGINT, live replay with drops, the network source with loss, the fake
   # camera, the API, the view server and the ROS 2 sink), with the voca tool some of them run.
@@ -64,17 +90,11 @@ if [ "${VOCA_SANITIZERS:-1}" != 0 ]; then
   mapfile -t tsan_tests < <(test_names --preset tsan)
   cmake --build --preset tsan --target voca $(build_targets build/tsan "${tsan_tests[@]}")
   stage_done "tsan build (tests labelled threads)"
-  ctest --preset tsan
+  # Their input sequences are rendered by the Release voca (VOCA_TEST_SYNTH, test::renderSynth):
+  # ten times faster than under TSan, and only input there; test_synth_e2e checks the renderer's
+  # own threads under TSan.
+  VOCA_TEST_SYNTH="$PWD/build/release/bin/voca" ctest --preset tsan
   stage_done "tsan tests (label threads)"
-fi
-
-# Fuzz stage: every input parser under libFuzzer with ASan + UBSan, 10 s per target from the
-# committed seed corpora (regression inputs included); any crash, leak or sanitizer report fails.
-# VOCA_FUZZ_SECONDS changes the time per target; 0 skips the stage.
-fuzz_seconds=${VOCA_FUZZ_SECONDS:-10}
-if [ "${fuzz_seconds}" != 0 ]; then
-  bash tools/fuzz.sh "${fuzz_seconds}"
-  stage_done "fuzz"
 fi
 
 # Cross stage: build for aarch64 and run the unit tests under qemu-user, so the ARM build cannot

@@ -17,3 +17,8 @@ build_targets() {
     if grep -qx "$name" <<<"$all"; then echo "$name"; fi
   done
 }
+
+# Every default target of a tree except the tests: each top directory's `all` but tests/all.
+all_but_tests() {
+  ninja -C "$1" -t query all | sed -n '/input: phony/,/outputs:/{/^    /s/^ *//p}' | grep -vx 'tests/all'
+}
