@@ -46,7 +46,7 @@ struct Rendered {
   fs::path raw = dir / "synth";
   fs::path video = dir / "video";
   Rendered() {
-    REQUIRE(test::runVoca("synth --out " + raw.string() + " --motion aggressive --seconds 2 --supersample 1") == 0);
+    REQUIRE(test::renderSynth(raw, "--motion aggressive --seconds 2 --supersample 1") == 0);
     REQUIRE(test::runVoca("encode " + raw.string() + " --out " + video.string() + " --bitrate 500k") == 0);
   }
 };

@@ -163,7 +163,7 @@ std::size_t expectPublishedTrajectory(const fs::path& input, const std::string& 
 
 TEST_CASE("voca run --ros2 on a rendered sequence: every message is its frame's trajectory row") {
   test::ScratchDir dir("ros2-e2e-synth");
-  REQUIRE(test::runVoca("synth --out " + (dir / "synth").string() + " --seconds 2 --supersample 1") == 0);
+  REQUIRE(test::renderSynth(dir / "synth", "--seconds 2 --supersample 1") == 0);
   REQUIRE(test::runVoca("encode " + (dir / "synth").string() + " --out " + (dir / "video").string() +
                         " --bitrate 500k") == 0);
   CHECK(expectPublishedTrajectory(dir / "video", "rendered, 500 kbit/s") > 30);

@@ -53,7 +53,7 @@ struct Rendered {
   test::ScratchDir dir{"stream-e2e"};
   fs::path raw = dir / "synth";
   Rendered() {
-    REQUIRE(test::runVoca("synth --out " + raw.string() + " --motion gentle --seconds 3 --supersample 1") == 0);
+    REQUIRE(test::renderSynth(raw, "--motion gentle --seconds 3 --supersample 1") == 0);
   }
 };
 const Rendered& rendered() {

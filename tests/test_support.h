@@ -72,6 +72,18 @@ inline int runVoca(const std::string& args) {
   return std::system(command.c_str());
 }
 
+// Renders a synthetic sequence as test input: `voca synth --out <out> <args>`, output discarded;
+// returns std::system's status like runVoca. VOCA_TEST_SYNTH may name another voca to render with:
+// tools/test.sh points the ThreadSanitizer stage at the Release build, where rendering is ten times
+// faster, because there the sequence is only input (the renderer's own threads are checked under
+// TSan by test_synth_e2e's fisheye case).
+inline int renderSynth(const std::filesystem::path& out, const std::string& args) {
+  const char* other = std::getenv("VOCA_TEST_SYNTH");
+  const std::string voca = other != nullptr && *other != '\0' ? other : std::string(VOCA_BINARY_DIR) + "/bin/voca";
+  const std::string command = voca + " synth --out " + out.string() + " " + args + " >/dev/null 2>&1";
+  return std::system(command.c_str());
+}
+
 // What a command printed (stdout and stderr together) and its exit code.
 struct CommandOutput {
   int exit_code = -1;

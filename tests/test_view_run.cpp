@@ -25,7 +25,7 @@ struct Rendered {
   test::ScratchDir dir{"view-run"};
   fs::path raw = dir / "synth";
   Rendered() {
-    REQUIRE(test::runVoca("synth --out " + raw.string() + " --motion fast-rotation --seconds 1 --supersample 1") == 0);
+    REQUIRE(test::renderSynth(raw, "--motion fast-rotation --seconds 1 --supersample 1") == 0);
   }
 };
 
