@@ -16,3 +16,7 @@ voca_add_test(test_decode_pairing SOURCES test_decode_pairing.cpp LIBS voca_driv
               voca_platform_v4l2 PkgConfig::FFMPEG)
 # `voca bench decode` on a VOCA folder made in the test: rates and bitrates as stream and recording.
 voca_add_test(test_decode_bench SOURCES test_decode_bench.cpp LIBS voca_pipeline_bench voca_drivers_encode)
+# Software decoding allocates its picture memory at the first picture: a randomly damaged stream
+# never makes the decoder allocate another picture later (resident memory flat in a soak).
+voca_add_test(test_decode_picture_pool SOURCES test_decode_picture_pool.cpp LIBS voca_drivers_decode
+              voca_drivers_encode PkgConfig::FFMPEG)

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/decode/ffmpeg_util.h"
+#include "drivers/decode/picture_pool.h"
 #include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
 
@@ -121,6 +122,8 @@ struct VideoDecoder::Impl {
   DecoderOptions options;
   std::string source;
   DecoderChoice choice;
+  // Picture memory of the software contexts (declared before them: a context must not outlive its pool).
+  std::unique_ptr<PicturePool> pixel_pool, motion_pool;
   const AVCodecContext* pixel_context = nullptr;  // the libavcodec pixel decoder, if pixel is one
   std::unique_ptr<PixelDecoder> pixel;            // produces the output frames (software, or the hardware decoder)
   CodecContextPtr motion;                         // hardware decoders only: software parse for the motion vectors
@@ -156,7 +159,7 @@ struct VideoDecoder::Impl {
     if (!frame || !transfer || !packet) throw RuntimeFailure("out of memory allocating decoder buffers");
   }
   CodecContextPtr allocContext(const AVCodec* codec) const;
-  CodecContextPtr openSoftware(bool motion_only) const;
+  CodecContextPtr openSoftware(bool motion_only, PicturePool& pool) const;
   CodecContextPtr openVaapi();
   CodecContextPtr openV4l2m2m() const;
   void open(DecoderKind kind);
@@ -167,6 +170,11 @@ struct VideoDecoder::Impl {
   int feed(const AVPacket* pkt, std::int64_t index);
   void drainMotion();
   void allocMotionSlots();
+  PicturePool& newPixelPool() {
+    // Impl::frame keeps the picture last received until the next receive().
+    pixel_pool = std::make_unique<PicturePool>(1);
+    return *pixel_pool;
+  }
   void usePixel(CodecContextPtr ctx) {
     auto decoder = std::make_unique<CodecPixelDecoder>(std::move(ctx));
     pixel_context = decoder->context();
@@ -269,7 +277,7 @@ bool lumaOnlyDecodingAvailable() {
   return available;
 }
 
-CodecContextPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
+CodecContextPtr VideoDecoder::Impl::openSoftware(bool motion_only, PicturePool& pool) const {
   const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
   if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
   CodecContextPtr ctx = allocContext(codec);
@@ -287,6 +295,7 @@ CodecContextPtr VideoDecoder::Impl::openSoftware(bool motion_only) const {
   // Asked of a libavcodec built without it, the flag is ignored with a warning on every open.
   if (options.luma_only && lumaOnlyDecodingAvailable()) ctx->flags |= AV_CODEC_FLAG_GRAY;
   if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
+  pool.attach(ctx.get());
   const int rc = avcodec_open2(ctx.get(), codec, nullptr);
   if (rc < 0)
     throw RuntimeFailure(source + ": cannot open the " + stream.codec_name + " decoder (" + avErrorText(rc) + ")");
@@ -333,9 +342,11 @@ void VideoDecoder::Impl::open(DecoderKind kind) {
   pixel_context = nullptr;
   motion.reset();
   hw_device.reset();
+  pixel_pool.reset();
+  motion_pool.reset();
   if (!options.decode_pixels) {
     // An MV-only parse is software by nature: hardware would make pixels nobody reads.
-    usePixel(openSoftware(true));
+    usePixel(openSoftware(true, newPixelPool()));
     return;
   }
   switch (kind) {
@@ -346,14 +357,16 @@ void VideoDecoder::Impl::open(DecoderKind kind) {
       usePixel(openV4l2m2m());
       break;
     default:
-      usePixel(openSoftware(false));
+      usePixel(openSoftware(false, newPixelPool()));
       return;
   }
   if (options.export_motion) allocMotionSlots();
 }
 
 void VideoDecoder::Impl::allocMotionSlots() {
-  motion = openSoftware(true);
+  // The parsed frames waiting in the slots keep no picture (drainMotion releases it).
+  motion_pool = std::make_unique<PicturePool>(0);
+  motion = openSoftware(true, *motion_pool);
   motion_slots.clear();
   motion_slots.resize(kMotionQueueDepth);
   for (MotionSlot& slot : motion_slots) {
@@ -410,6 +423,12 @@ VideoDecoder::~VideoDecoder() = default;
 
 std::int64_t VideoDecoder::pixelFramesDropped() const { return impl_->pixel_dropped; }
 
+std::int64_t VideoDecoder::picturesAllocated() const {
+  const Impl& d = *impl_;
+  const bool pooled = d.pixel_pool && d.pixel_context != nullptr && d.pixel_context->opaque == d.pixel_pool.get();
+  return pooled ? d.pixel_pool->allocated() : -1;
+}
+
 DecoderKind VideoDecoder::kind() const { return impl_->choice.kind; }
 const std::string& VideoDecoder::description() const { return impl_->choice.description; }
 const StreamInfo& VideoDecoder::stream() const { return impl_->stream; }
@@ -448,6 +467,10 @@ void VideoDecoder::Impl::drainMotion() {
     const int rc = avcodec_receive_frame(motion.get(), slot);
     if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
     if (rc < 0) fail(rc, "in the motion-vector parse near packet " + std::to_string(last_packet));
+    // Only the vectors and the picture's properties are read from a slot: its planes go back to the
+    // pool now, so the decoder's picture memory does not depend on how far the device lags.
+    for (AVBufferRef*& plane : slot->buf) av_buffer_unref(&plane);
+    std::fill(std::begin(slot->data), std::end(slot->data), nullptr);
     free_slot->waiting = true;
     free_slot->arrival = motion_parsed++;
     free_slot->passed = 0;

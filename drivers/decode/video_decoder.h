@@ -86,6 +86,10 @@ class VideoDecoder {
   // Hardware decoders: pictures the pixel decoder never returned (their vectors were parsed, then
   // given up once later pictures had come out); the frame is missing from the output, not wrong.
   std::int64_t pixelFramesDropped() const;
+  // Software decoding: picture buffers allocated for the decoder. They are allocated at its first
+  // picture, as many as its stream's headers let it hold at once; a count rising after that means it
+  // held more, and its memory grew. -1 when libavcodec allocates them (hardware decoders).
+  std::int64_t picturesAllocated() const;
   const std::string& description() const;  // "decoder: software", "decoder: vaapi (+ software MV parse)"
   const StreamInfo& stream() const;
 
