@@ -60,8 +60,7 @@ fi
 cmake --preset release
 if [ "${sanitizers}" != 0 ]; then
   mapfile -t release_tests < <(test_names --preset release | grep -vxF -f <(printf '%s\n' "${asan_tests[@]}"))
-  cmake --build --preset release --target $(all_but_tests build/release) \
-    $(build_targets build/release "${release_tests[@]}")
+  cmake --build --preset release --target $(all_except_tests build/release "${asan_tests[@]}")
   stage_done "release build (all but the unit tests run under ASan)"
   ctest --preset release -R "^($(IFS='|'; echo "${release_tests[*]}"))\$"
   stage_done "release tests (end-to-end, release-only)"

@@ -18,7 +18,25 @@ build_targets() {
   done
 }
 
-# Every default target of a tree except the tests: each top directory's `all` but tests/all.
-all_but_tests() {
-  ninja -C "$1" -t query all | sed -n '/input: phony/,/outputs:/{/^    /s/^ *//p}' | grep -vx 'tests/all'
+# Every default target of a tree (what `all` builds) except the named test executables: a tree
+# builds what it ships and runs, less the tests another tree runs. Programs that script tests run
+# (in tests/, named by no test) stay in.
+all_except_tests() {
+  local build_dir=$1
+  shift
+  local skip
+  skip=$(printf 'bin/%s\n' "$@")
+  local target
+  for target in $(phony_inputs "$build_dir" all); do
+    if [ "$target" = tests/all ]; then
+      phony_inputs "$build_dir" tests/all | grep -vxF -f <(echo "$skip")
+    else
+      echo "$target"
+    fi
+  done
+}
+
+# What a phony target of a tree (e.g. all, tests/all) stands for, one target a line.
+phony_inputs() {
+  ninja -C "$1" -t query "$2" | sed -n '/input: phony/,/outputs:/{/^    /s/^ *//p}'
 }
