@@ -12,6 +12,7 @@
 #include "drivers/decode/video_decoder.h"
 #include "drivers/encode/video_encoder.h"
 #include "tests/test_alloc_counter.h"
+#include "tests/test_moving_texture.h"
 #include "tests/test_support.h"
 
 namespace {
@@ -20,17 +21,7 @@ constexpr int kWidth = 160, kHeight = 128, kFrames = 20;
 // Frames before the count starts: the first frame sizes the luma plane and the motion field.
 constexpr int kWarmupFrames = 2;
 
-// A smooth texture moving 1.5 px right and 0.5 px down per frame, so P-frames carry vectors.
-voca::GrayImage frameAt(int k) {
-  voca::GrayImage image(kWidth, kHeight);
-  for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x) {
-      const double u = x - 1.5 * k, v = y - 0.5 * k;
-      image(x, y) = static_cast<std::uint8_t>(128.0 + 60.0 * std::sin(0.31 * u + 0.11 * v) +
-                                              50.0 * std::cos(0.07 * u - 0.23 * v));
-    }
-  return image;
-}
+voca::GrayImage frameAt(int k) { return voca::test::movingTexture(kWidth, kHeight, k); }
 
 }  // namespace
 

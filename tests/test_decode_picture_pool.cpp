@@ -18,6 +18,7 @@
 #include "drivers/decode/pixel_decoder.h"
 #include "drivers/decode/video_decoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "tests/test_moving_texture.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"
 
@@ -29,17 +30,7 @@ namespace {
 
 constexpr int kWidth = 160, kHeight = 128, kFrames = 24, kPasses = 40;
 
-// A texture moving 1.5 px right and 0.5 px down per frame, so P-frames carry vectors.
-voca::GrayImage frameAt(int k) {
-  voca::GrayImage image(kWidth, kHeight);
-  for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x) {
-      const double u = x - 1.5 * k, v = y - 0.5 * k;
-      image(x, y) = static_cast<std::uint8_t>(128.0 + 60.0 * std::sin(0.31 * u + 0.11 * v) +
-                                              50.0 * std::cos(0.07 * u - 0.23 * v));
-    }
-  return image;
-}
+voca::GrayImage frameAt(int k) { return voca::test::movingTexture(kWidth, kHeight, k); }
 
 // Noise over the packet past its length prefix and first slice header bytes, as the soak's source does.
 void damage(voca::decode::Packet& packet, std::mt19937_64& rng) {
