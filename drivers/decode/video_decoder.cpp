@@ -6,10 +6,9 @@
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
-#include <string_view>
 #include <vector>
 
-#include "drivers/decode/ffmpeg_util.h"
+#include "drivers/decode/codec_contexts.h"
 #include "drivers/decode/picture_pool.h"
 #include "drivers/ffmpeg/av_objects.h"
 #include "voca/core/error.h"
@@ -72,22 +71,6 @@ PictureType pictureType(AVPictureType type) {
     default:
       return PictureType::kUnknown;
   }
-}
-
-AVPixelFormat pickVaapiFormat(AVCodecContext* /*ctx*/, const AVPixelFormat* formats) {
-  for (const AVPixelFormat* f = formats; *f != AV_PIX_FMT_NONE; ++f) {
-    if (*f == AV_PIX_FMT_VAAPI) return *f;
-  }
-  return AV_PIX_FMT_NONE;
-}
-
-void setExtradata(AVCodecContext* ctx, const StreamInfo& stream) {
-  if (stream.extradata.empty()) return;
-  const std::size_t size = stream.extradata.size();
-  ctx->extradata = static_cast<std::uint8_t*>(av_mallocz(size + AV_INPUT_BUFFER_PADDING_SIZE));
-  if (ctx->extradata == nullptr) throw RuntimeFailure("out of memory copying codec headers");
-  std::memcpy(ctx->extradata, stream.extradata.data(), size);
-  ctx->extradata_size = static_cast<int>(size);
 }
 
 // The per-macroblock quantiser of a decoded picture (AV_FRAME_DATA_VIDEO_ENC_PARAMS) into `motion`.
@@ -158,10 +141,7 @@ struct VideoDecoder::Impl {
     packet.reset(av_packet_alloc());
     if (!frame || !transfer || !packet) throw RuntimeFailure("out of memory allocating decoder buffers");
   }
-  CodecContextPtr allocContext(const AVCodec* codec) const;
-  CodecContextPtr openSoftware(bool motion_only, PicturePool& pool) const;
-  CodecContextPtr openVaapi();
-  CodecContextPtr openV4l2m2m() const;
+  detail::DecoderSetup setup() const { return {stream, options, source}; }
   void open(DecoderKind kind);
   // True when the decoder refused the packet's data as corrupt; throws for any other failure.
   bool refused(int rc, const AVPacket* pkt, std::int64_t index) const;
@@ -260,83 +240,6 @@ void VideoDecoder::Impl::fail(int rc, const std::string& what) const {
   throw RuntimeFailure(source + ": decoder failure " + what + " (" + avErrorText(rc) + ")");
 }
 
-// A context for `codec` that knows the stream's frame size, time base and out-of-band headers.
-CodecContextPtr VideoDecoder::Impl::allocContext(const AVCodec* codec) const {
-  CodecContextPtr ctx(avcodec_alloc_context3(codec));
-  if (!ctx) throw RuntimeFailure("out of memory allocating a decoder");
-  ctx->width = stream.width;
-  ctx->height = stream.height;
-  ctx->pkt_timebase = AVRational{stream.time_base_num, stream.time_base_den};
-  setExtradata(ctx.get(), stream);
-  return ctx;
-}
-
-bool lumaOnlyDecodingAvailable() {
-  static const bool available =
-      std::string_view(avcodec_configuration()).find("--enable-gray") != std::string_view::npos;
-  return available;
-}
-
-CodecContextPtr VideoDecoder::Impl::openSoftware(bool motion_only, PicturePool& pool) const {
-  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
-  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no decoder for " + stream.codec_name);
-  CodecContextPtr ctx = allocContext(codec);
-  // One thread, slice threading only: frame threading delays output and costs memory per thread.
-  ctx->thread_count = 1;
-  ctx->thread_type = FF_THREAD_SLICE;
-  // The quantiser of each macroblock beside its vectors: how coarsely the encoder coded the block, a
-  // confidence signal for the vector (frontend prior_max_qp).
-  if (options.export_motion || motion_only) {
-    ctx->export_side_data |= AV_CODEC_EXPORT_DATA_MVS;
-    if (options.export_qp) ctx->export_side_data |= AV_CODEC_EXPORT_DATA_VIDEO_ENC_PARAMS;
-  }
-  // Vectors do not depend on reconstructed pixels, so the deblocking filter can be skipped.
-  if (motion_only || options.skip_loop_filter) ctx->skip_loop_filter = AVDISCARD_ALL;
-  // Asked of a libavcodec built without it, the flag is ignored with a warning on every open.
-  if (options.luma_only && lumaOnlyDecodingAvailable()) ctx->flags |= AV_CODEC_FLAG_GRAY;
-  if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
-  pool.attach(ctx.get());
-  const int rc = avcodec_open2(ctx.get(), codec, nullptr);
-  if (rc < 0)
-    throw RuntimeFailure(source + ": cannot open the " + stream.codec_name + " decoder (" + avErrorText(rc) + ")");
-  return ctx;
-}
-
-CodecContextPtr VideoDecoder::Impl::openVaapi() {
-  const AVCodec* codec = avcodec_find_decoder(detail::avCodecId(stream.codec));
-  if (codec == nullptr || !detail::codecSupportsVaapi(codec)) {
-    throw RuntimeFailure(source + ": libavcodec cannot decode " + stream.codec_name + " with VAAPI");
-  }
-  AVBufferRef* device = nullptr;
-  int rc = av_hwdevice_ctx_create(&device, AV_HWDEVICE_TYPE_VAAPI, options.vaapi_device.c_str(), nullptr, 0);
-  if (rc < 0) {
-    throw RuntimeFailure("cannot open VAAPI device " + options.vaapi_device + " (" + avErrorText(rc) + ")");
-  }
-  hw_device.reset(device);
-  CodecContextPtr ctx = allocContext(codec);
-  ctx->hw_device_ctx = av_buffer_ref(hw_device.get());
-  if (ctx->hw_device_ctx == nullptr) throw RuntimeFailure("out of memory referencing the VAAPI device");
-  ctx->get_format = pickVaapiFormat;
-  ctx->thread_count = 1;
-  if (options.strict) ctx->err_recognition |= AV_EF_EXPLODE;
-  rc = avcodec_open2(ctx.get(), codec, nullptr);
-  if (rc < 0) throw RuntimeFailure(source + ": cannot open the VAAPI decoder (" + avErrorText(rc) + ")");
-  return ctx;
-}
-
-CodecContextPtr VideoDecoder::Impl::openV4l2m2m() const {
-  const char* name = detail::v4l2m2mDecoderName(stream.codec);
-  const AVCodec* codec = name == nullptr ? nullptr : avcodec_find_decoder_by_name(name);
-  if (codec == nullptr) throw RuntimeFailure(source + ": libavcodec has no V4L2 M2M decoder for " + stream.codec_name);
-  CodecContextPtr ctx = allocContext(codec);
-  const int rc = avcodec_open2(ctx.get(), codec, nullptr);
-  if (rc < 0) {
-    throw RuntimeFailure(source + ": cannot open " + name + " (" + avErrorText(rc) +
-                         "); no V4L2 memory-to-memory decoder device?");
-  }
-  return ctx;
-}
-
 void VideoDecoder::Impl::open(DecoderKind kind) {
   pixel.reset();
   pixel_context = nullptr;
@@ -346,18 +249,18 @@ void VideoDecoder::Impl::open(DecoderKind kind) {
   motion_pool.reset();
   if (!options.decode_pixels) {
     // An MV-only parse is software by nature: hardware would make pixels nobody reads.
-    usePixel(openSoftware(true, newPixelPool()));
+    usePixel(detail::openSoftwareDecoder(setup(), true, newPixelPool()));
     return;
   }
   switch (kind) {
     case DecoderKind::kVaapi:
-      usePixel(openVaapi());
+      usePixel(detail::openVaapiDecoder(setup(), hw_device));
       break;
     case DecoderKind::kV4l2m2m:
-      usePixel(openV4l2m2m());
+      usePixel(detail::openV4l2m2mDecoder(setup()));
       break;
     default:
-      usePixel(openSoftware(false, newPixelPool()));
+      usePixel(detail::openSoftwareDecoder(setup(), false, newPixelPool()));
       return;
   }
   if (options.export_motion) allocMotionSlots();
@@ -366,7 +269,7 @@ void VideoDecoder::Impl::open(DecoderKind kind) {
 void VideoDecoder::Impl::allocMotionSlots() {
   // The parsed frames waiting in the slots keep no picture (drainMotion releases it).
   motion_pool = std::make_unique<PicturePool>(0);
-  motion = openSoftware(true, *motion_pool);
+  motion = detail::openSoftwareDecoder(setup(), true, *motion_pool);
   motion_slots.clear();
   motion_slots.resize(kMotionQueueDepth);
   for (MotionSlot& slot : motion_slots) {
