@@ -431,6 +431,13 @@ struct Pipeline::Impl final : StageContext {
 
 std::string helperPinName(std::string_view stage) { return std::string(stage) + ".helper"; }
 
+const StageReport* RunReport::stage(std::string_view name) const {
+  for (const StageReport& s : stages) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
 std::vector<std::pair<std::string, int>> parseStagePins(std::string_view text) {
   std::vector<std::pair<std::string, int>> pins;
   while (!text.empty()) {

@@ -99,6 +99,9 @@ struct RunReport {
   bool stopped = false;  // a stop request ended the run early
   double wall_s = 0.0;
   std::vector<std::string> warnings;  // refused pinning, scheduling or memory locking
+
+  // The report of the stage with this name ("frontend", "backend", ...), or nullptr.
+  const StageReport* stage(std::string_view name) const;
 };
 
 // Parses a stage-to-core map, "decode:0,frontend:0,backend:1" (stage names as the pipeline reports

@@ -12,13 +12,6 @@ namespace voca::pipeline {
 
 namespace {
 
-const StageReport* findStage(const RunReport& report, std::string_view name) {
-  for (const StageReport& s : report.stages) {
-    if (s.name == name) return &s;
-  }
-  return nullptr;
-}
-
 double pct(std::int64_t a, std::int64_t b) {
   return b > 0 ? 100.0 * static_cast<double>(a) / static_cast<double>(b) : 0.0;
 }
@@ -56,8 +49,8 @@ std::string formatRunSummary(const VoRunResult& r) {
                  r.has_motion ? "" : " (raw images: no motion vectors)");
   fmt::format_to(out, "frames: {}, keyframes: {}, resets: {}, lost: {}\n", r.frames, r.backend.keyframes,
                  r.backend.resets, r.backend.lost);
-  const StageReport* frontend = findStage(r.pipeline_report, "frontend");
-  const StageReport* backend = findStage(r.pipeline_report, "backend");
+  const StageReport* frontend = r.pipeline_report.stage("frontend");
+  const StageReport* backend = r.pipeline_report.stage("backend");
   if (frontend != nullptr && backend != nullptr) {
     fmt::format_to(
         out,
@@ -174,7 +167,7 @@ std::string formatTrackSummary(const VoRunResult& r, const FrontendConfig& confi
                    t.guess_prior.count(), t.guess_plain.formatQuantile(0.5), t.guess_plain.formatQuantile(0.9),
                    t.guess_prior.formatQuantile(0.5), t.guess_prior.formatQuantile(0.9));
   }
-  if (const StageReport* frontend = findStage(r.pipeline_report, "frontend")) {
+  if (const StageReport* frontend = r.pipeline_report.stage("frontend")) {
     fmt::format_to(
         out,
         "time per stereo frame: wall median {:.2f} ms, p99 {:.2f} ms; thread CPU median {:.2f} ms, p99 {:.2f} "

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "pipeline/demo/demo_runner.h"
+#include "platform/realtime/clock.h"
 #include "platform/realtime/stop_signal.h"
 #include "tools/voca/command.h"
 #include "tools/voca/pipeline_cli.h"
@@ -27,11 +28,9 @@ struct DemoCli {
   voca::cli::ViewCli view;
 };
 
-double stageMedianMs(const VoRunResult& r, std::string_view stage) {
-  for (const voca::pipeline::StageReport& s : r.pipeline_report.stages) {
-    if (s.name == stage) return static_cast<double>(s.service.quantileNs(0.5)) * 1e-6;
-  }
-  return 0.0;
+double stageMedianMs(const VoRunResult& r, std::string_view name) {
+  const voca::pipeline::StageReport* stage = r.pipeline_report.stage(name);
+  return stage != nullptr ? voca::platform::nsToMs(stage->service.quantileNs(0.5)) : 0.0;
 }
 
 // The side-by-side table and what was written.
