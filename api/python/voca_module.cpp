@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include "shared_options.h"
 #include "voca_rt/voca_rt.h"
 
 namespace py = pybind11;
@@ -149,49 +150,6 @@ py::dict summaryDict(const voca_rt::Summary& s) {
   d["latency_report"] = s.latency_report;
   return d;
 }
-
-// The options both voca.Odometry and voca.run take, as the command line's.
-struct CommonOptions {
-  OptionalPath calibration;
-  OptionalPath config;  // a shipped config's name or a JSON file
-  std::optional<std::string> mode;
-  std::optional<bool> bridge_iframes;
-  int max_points = 1000;
-  int threads = 0, frontend_threads = 0;
-  std::string pins, scheduling = "other";
-  int priority = 50;
-  bool lock_memory = false, strict = false;
-  std::string decoder = "auto";
-  bool skip_deblock = false;
-  OptionalPath trajectory_file;
-  std::string trajectory_format = "tum";
-  OptionalPath statistics_file, trace_file;
-  bool progress = false;
-
-  voca_rt::Options options() const {
-    voca_rt::Options o;
-    o.calibration_file = pathText(calibration);
-    o.config = pathText(config);
-    o.mode = mode.value_or("");
-    o.bridge_iframes = bridge_iframes;
-    o.max_points = max_points;
-    o.threads = threads;
-    o.frontend_threads = frontend_threads;
-    o.pins = pins;
-    o.scheduling = scheduling;
-    o.priority = priority;
-    o.lock_memory = lock_memory;
-    o.strict = strict;
-    o.decoder = decoder;
-    o.skip_deblock = skip_deblock;
-    o.trajectory_file = pathText(trajectory_file);
-    o.trajectory_format = trajectory_format;
-    o.statistics_file = pathText(statistics_file);
-    o.trace_file = pathText(trace_file);
-    o.progress = progress;
-    return o;
-  }
-};
 
 // A contiguous byte view of any object with the buffer protocol (bytes, bytearray, memoryview, a
 // uint8 NumPy array), held for as long as the C++ side reads it.
@@ -379,7 +337,7 @@ voca_rt::Summary runInterruptibly(const voca_rt::Input& input, voca_rt::Options 
   return summary;
 }
 
-py::object runPath(const std::filesystem::path& path, const CommonOptions& common, const OptionalPath& ground_truth,
+py::object runPath(const std::filesystem::path& path, const voca_rt::Options& options, const OptionalPath& ground_truth,
                    const std::optional<std::string>& encode, int max_frames, int first_frame, bool realtime,
                    double speed, double stream_wait_s, double stream_timeout_s, bool return_summary) {
   voca_rt::Input input;
@@ -393,7 +351,7 @@ py::object runPath(const std::filesystem::path& path, const CommonOptions& commo
   input.stream_wait_s = stream_wait_s;
   input.stream_timeout_s = stream_timeout_s;
   PoseStore store;
-  const voca_rt::Summary summary = runInterruptibly(input, common.options(), store);
+  const voca_rt::Summary summary = runInterruptibly(input, options, store);
   py::array_t<double> rows = tumArray(store.tumRows());
   // As `voca run` exits 1 on these; what was estimated up to then travels with the error.
   const std::string& why = !summary.error.empty() ? summary.error : summary.failure;
@@ -484,6 +442,56 @@ body frame; the world is the first frame's body pose), the values `voca run --ou
 Threads: the pipeline runs on threads of its own; pushes, finish() and whole runs release the GIL.
 No Python code ever runs on a pipeline thread: poses are polled.)doc";
 
+constexpr const char* kOdometryDoc = R"doc(Stereo visual odometry on frames the program pushes.
+
+Odometry(calibration, *, input="h264", live=False, ..., **options) builds the pipeline for frames of
+the calibration's image size (every buffer allocated here) and starts its threads. Push one frame at a
+time with its sensor time (ns, strictly increasing); each pushed frame gives one pose, in order, which
+poll() or poses() hand over on any thread (one thread may push while another polls). finish() ends the
+input and returns the run's summary. As a context manager, leaving the with-block finishes (flushing
+every pushed frame; discarding the waiting ones when the block raised).
+
+  calibration       calibration file: Basalt JSON, Kalibr YAML, EuRoC sensor.yaml (or its mav0), KITTI calib.txt
+  input="h264"      "h264": push_h264 with one Annex B access unit per camera (the compressed path, motion
+                    vectors as priors); "gray": push_gray with 8-bit images (raw, or encoded on the device
+                    first with encode_bitrate)
+  live=False        live policy: a push never waits (a frame without room is dropped, push returns False)
+                    and a stage that falls behind drops the oldest frame; False: pushes wait for room and
+                    every frame is processed, so the same frames always give the same poses
+  encode_bitrate=None  gray input: encode each camera at this bitrate ("1M", "500k") first, as on a device
+  encoder="auto"    auto, x264, v4l2m2m, vaapi (with encode_bitrate)
+  frame_rate_hz=0.0 the cameras' rate, for the on-device encoder's rate control; 0: 20 Hz
+  poll_capacity=4096  poses kept for poll(); beyond, the oldest unpolled are dropped
+
+Options, as voca.run's and the command line's of the same names (None: the default):
+)doc";
+
+constexpr const char* kRunDoc =
+    R"doc(Run the odometry over a recorded input, as `voca run <path>` does; returns the poses as a float64
+(N, 8) array of TUM rows [t_s, x, y, z, qx, qy, qz, qw], exactly the numbers `voca run --out x.tum`
+writes for the same input and options. With return_summary=True: (rows, summary dict), the summary as
+Odometry.finish() gives it (with ate_rmse_m and rte_rmse_m when the input has ground truth).
+
+  path              a EuRoC/TUM-VI or KITTI folder (raw images), a VOCA video folder (mav0/camN/data.mp4),
+                    a stream URL that `voca stream` sends to (udp://127.0.0.1:5000), or a stream it
+                    recorded to a file
+  calib             calibration file (default: the one found with the dataset; a stream needs one)
+  encode            a raw dataset encoded first at this bitrate ("500k"), as --encode
+  max_frames        frames to run (--frames; 0: all); first_frame: the first one (--start-frame)
+  gt                ground truth for ATE/RTE (default: the dataset's)
+  realtime, speed   replay at the recording's rate times speed, under the live policy (--realtime, --speed)
+  stream_wait_s, stream_timeout_s  a stream URL: how long to wait for it to begin; the silence that ends it
+
+Options, as Odometry's and the command line's of the same names (None: the default; mode, config
+and threads may also be given by position):
+)doc";
+
+constexpr const char* kRunDocEnd = R"doc(
+Runs without the GIL; Ctrl-C (KeyboardInterrupt) stops the run cleanly first. Raises voca.Error for
+bad input (a missing dataset or calibration, images that do not fit it: the CLI's message) and when a
+stage failed or no pose could be estimated; such an error carries .poses (the rows estimated before)
+and .summary.)doc";
+
 }  // namespace
 
 PYBIND11_MODULE(voca, m) {
@@ -550,72 +558,16 @@ PYBIND11_MODULE(voca, m) {
                (p.keyframe ? ", keyframe" : "") + ")";
       });
 
-  py::class_<PyOdometry>(m, "Odometry", R"doc(Stereo visual odometry on frames the program pushes.
-
-Odometry(calibration, *, input="h264", config=None, mode=None, ...) builds the pipeline for frames of
-the calibration's image size (every buffer allocated here) and starts its threads. Push one frame at a
-time with its sensor time (ns, strictly increasing); each pushed frame gives one pose, in order, which
-poll() or poses() hand over on any thread (one thread may push while another polls). finish() ends the
-input and returns the run's summary. As a context manager, leaving the with-block finishes (flushing
-every pushed frame; discarding the waiting ones when the block raised).
-
-Keyword arguments (the command line's options of the same names):
-  calibration       calibration file: Basalt JSON, Kalibr YAML, EuRoC sensor.yaml (or its mav0), KITTI calib.txt
-  input             "h264": push_h264 with one Annex B access unit per camera (the compressed path, motion
-                    vectors as priors); "gray": push_gray with 8-bit images (raw, or encoded on the device
-                    first with encode_bitrate)
-  config            shipped config name (euroc, tumvi, kitti) or a JSON config file; None: euroc
-  mode              prior mode: none, mv, of_then_mv, mv_then_of, mv_parallel_of; None: the config's
-  bridge_iframes    reuse the last P-frame's motion on I-frames; None: the config's
-  max_points        tracker capacity per camera
-  live              live policy: a push never waits (a frame without room is dropped, push returns False)
-                    and a stage that falls behind drops the oldest frame; False: pushes wait for room and
-                    every frame is processed, so the same frames always give the same poses
-  encode_bitrate    gray input: encode each camera at this bitrate ("1M", "500k") first, as on a device
-  encoder           auto, x264, v4l2m2m, vaapi (with encode_bitrate)
-  frame_rate_hz     the cameras' rate, for the on-device encoder's rate control; 0: 20 Hz
-  threads           0: one thread per stage; 1: all stages on one thread; N: stages grouped on N threads
-  frontend_threads  0: automatic; 1 or 2
-  pins              stage-to-core map, "decode:0,frontend:0,backend:1"
-  scheduling        other, fifo or rr (real-time classes need CAP_SYS_NICE); priority 1-99 with them
-  lock_memory       mlockall before the first frame
-  strict            a damaged frame stops the run instead of being skipped
-  decoder           auto, software, vaapi, v4l2m2m; skip_deblock: software decoding without the loop filter
-  poll_capacity     poses kept for poll(); beyond, the oldest unpolled are dropped
-  trajectory_file   also write each pose there as it is estimated (trajectory_format tum, euroc or kitti)
-  statistics_file   JSON statistics written at finish(); trace_file: Chrome trace of every frame's stages
-  progress          progress lines on stderr
-
-Raises voca.Error for a calibration, config or option that cannot be used.)doc")
-      .def(py::init([](const OptionalPath& calibration, const std::string& input, const OptionalPath& config,
-                       const std::optional<std::string>& mode, const std::optional<bool>& bridge_iframes,
-                       int max_points, bool live, const std::optional<std::string>& encode_bitrate,
-                       const std::string& encoder, double frame_rate_hz, int threads, int frontend_threads,
-                       const std::string& pins, const std::string& scheduling, int priority, bool lock_memory,
-                       bool strict, const std::string& decoder, bool skip_deblock, std::size_t poll_capacity,
-                       const OptionalPath& trajectory_file, const std::string& trajectory_format,
-                       const OptionalPath& statistics_file, const OptionalPath& trace_file, bool progress) {
-             CommonOptions common;
-             common.calibration = calibration;
-             common.config = config;
-             common.mode = mode;
-             common.bridge_iframes = bridge_iframes;
-             common.max_points = max_points;
-             common.threads = threads;
-             common.frontend_threads = frontend_threads;
-             common.pins = pins;
-             common.scheduling = scheduling;
-             common.priority = priority;
-             common.lock_memory = lock_memory;
-             common.strict = strict;
-             common.decoder = decoder;
-             common.skip_deblock = skip_deblock;
-             common.trajectory_file = trajectory_file;
-             common.trajectory_format = trajectory_format;
-             common.statistics_file = statistics_file;
-             common.trace_file = trace_file;
-             common.progress = progress;
-             voca_rt::Options options = common.options();
+  static const std::string odometry_doc =
+      std::string(kOdometryDoc) + voca_python::sharedOptionsDoc() +
+      "\nRaises voca.Error for a calibration, config or option that cannot be used.";
+  py::class_<PyOdometry>(m, "Odometry", odometry_doc.c_str())
+      .def(py::init([](const OptionalPath& calibration, const std::string& input, bool live,
+                       const std::optional<std::string>& encode_bitrate, const std::string& encoder,
+                       double frame_rate_hz, std::size_t poll_capacity, const py::kwargs& shared_options) {
+             voca_rt::Options options;
+             options.calibration_file = pathText(calibration);
+             voca_python::setSharedOptions(options, shared_options, "voca.Odometry");
              if (input == "h264") {
                options.input = voca_rt::InputKind::kH264;
              } else if (input == "gray") {
@@ -630,15 +582,9 @@ Raises voca.Error for a calibration, config or option that cannot be used.)doc")
              options.poll_capacity = poll_capacity;
              return std::make_unique<PyOdometry>(options);
            }),
-           py::arg("calibration"), py::kw_only(), py::arg("input") = "h264", py::arg("config") = py::none(),
-           py::arg("mode") = py::none(), py::arg("bridge_iframes") = py::none(), py::arg("max_points") = 1000,
-           py::arg("live") = false, py::arg("encode_bitrate") = py::none(), py::arg("encoder") = "auto",
-           py::arg("frame_rate_hz") = 0.0, py::arg("threads") = 0, py::arg("frontend_threads") = 0,
-           py::arg("pins") = "", py::arg("scheduling") = "other", py::arg("priority") = 50,
-           py::arg("lock_memory") = false, py::arg("strict") = false, py::arg("decoder") = "auto",
-           py::arg("skip_deblock") = false, py::arg("poll_capacity") = 4096, py::arg("trajectory_file") = py::none(),
-           py::arg("trajectory_format") = "tum", py::arg("statistics_file") = py::none(),
-           py::arg("trace_file") = py::none(), py::arg("progress") = false)
+           py::arg("calibration"), py::kw_only(), py::arg("input") = "h264", py::arg("live") = false,
+           py::arg("encode_bitrate") = py::none(), py::arg("encoder") = "auto", py::arg("frame_rate_hz") = 0.0,
+           py::arg("poll_capacity") = 4096)
       .def("push_h264", &PyOdometry::pushH264, py::arg("t_ns"), py::arg("left"), py::arg("right"),
            R"doc(Push one frame as one H.264 access unit per camera (bytes: Annex B, SPS/PPS in band before the
 first keyframe; no B-frames, one reference frame) taken at t_ns (ns, after the previous frame's).
@@ -686,66 +632,27 @@ poses estimated before can still be polled.)doc")
           },
           "Finishes: flushing every pushed frame, or discarding the waiting ones when the block raised.");
 
+  static const std::string run_doc = std::string(kRunDoc) + voca_python::sharedOptionsDoc() + kRunDocEnd;
   m.def(
       "run",
-      [](const std::filesystem::path& path, const OptionalPath& calib, const std::optional<std::string>& mode,
-         const OptionalPath& config, const std::optional<std::string>& encode, int max_frames, int first_frame,
-         int threads, const std::optional<bool>& bridge_iframes, const OptionalPath& gt, int max_points,
-         int frontend_threads, const std::string& pins, const std::string& scheduling, int priority, bool lock_memory,
-         bool strict, const std::string& decoder, bool skip_deblock, bool realtime, double speed, double stream_wait_s,
-         double stream_timeout_s, const OptionalPath& trajectory_file, const std::string& trajectory_format,
-         const OptionalPath& statistics_file, const OptionalPath& trace_file, bool progress, bool return_summary) {
-        CommonOptions common;
-        common.calibration = calib;
-        common.config = config;
-        common.mode = mode;
-        common.bridge_iframes = bridge_iframes;
-        common.max_points = max_points;
-        common.threads = threads;
-        common.frontend_threads = frontend_threads;
-        common.pins = pins;
-        common.scheduling = scheduling;
-        common.priority = priority;
-        common.lock_memory = lock_memory;
-        common.strict = strict;
-        common.decoder = decoder;
-        common.skip_deblock = skip_deblock;
-        common.trajectory_file = trajectory_file;
-        common.trajectory_format = trajectory_format;
-        common.statistics_file = statistics_file;
-        common.trace_file = trace_file;
-        common.progress = progress;
-        return runPath(path, common, gt, encode, max_frames, first_frame, realtime, speed, stream_wait_s,
+      [](const std::filesystem::path& path, const OptionalPath& calib, const py::object& mode, const py::object& config,
+         const std::optional<std::string>& encode, int max_frames, int first_frame, const py::object& threads,
+         const OptionalPath& gt, bool realtime, double speed, double stream_wait_s, double stream_timeout_s,
+         bool return_summary, const py::kwargs& shared_options) {
+        voca_rt::Options options;
+        options.calibration_file = pathText(calib);
+        voca_python::setSharedOption(options, "mode", mode, "voca.run");
+        voca_python::setSharedOption(options, "config", config, "voca.run");
+        voca_python::setSharedOption(options, "threads", threads, "voca.run");
+        voca_python::setSharedOptions(options, shared_options, "voca.run");
+        return runPath(path, options, gt, encode, max_frames, first_frame, realtime, speed, stream_wait_s,
                        stream_timeout_s, return_summary);
       },
       py::arg("path"), py::arg("calib") = py::none(), py::arg("mode") = py::none(), py::arg("config") = py::none(),
       py::arg("encode") = py::none(), py::arg("max_frames") = 0, py::arg("first_frame") = 0, py::arg("threads") = 0,
-      py::kw_only(), py::arg("bridge_iframes") = py::none(), py::arg("gt") = py::none(), py::arg("max_points") = 1000,
-      py::arg("frontend_threads") = 0, py::arg("pins") = "", py::arg("scheduling") = "other", py::arg("priority") = 50,
-      py::arg("lock_memory") = false, py::arg("strict") = false, py::arg("decoder") = "auto",
-      py::arg("skip_deblock") = false, py::arg("realtime") = false, py::arg("speed") = 1.0,
-      py::arg("stream_wait_s") = 30.0, py::arg("stream_timeout_s") = 3.0, py::arg("trajectory_file") = py::none(),
-      py::arg("trajectory_format") = "tum", py::arg("statistics_file") = py::none(), py::arg("trace_file") = py::none(),
-      py::arg("progress") = false, py::arg("return_summary") = false,
-      R"doc(Run the odometry over a recorded input, as `voca run <path>` does; returns the poses as a float64
-(N, 8) array of TUM rows [t_s, x, y, z, qx, qy, qz, qw], exactly the numbers `voca run --out x.tum`
-writes for the same input and options. With return_summary=True: (rows, summary dict), the summary as
-Odometry.finish() gives it (with ate_rmse_m and rte_rmse_m when the input has ground truth).
-
-path: a EuRoC/TUM-VI or KITTI folder (raw images), a VOCA video folder (mav0/camN/data.mp4), a stream
-URL that `voca stream` sends to (udp://127.0.0.1:5000), or a stream it recorded to a file.
-calib: calibration file (default: the one found with the dataset; a stream needs one).
-The keyword arguments are the command line's: mode, config, bridge_iframes (--bridge), encode (a raw
-dataset encoded first at this bitrate, "500k"), max_frames (--frames, 0: all), first_frame
-(--start-frame), gt (ground truth for ATE/RTE), max_points, threads, frontend_threads, pins (--pin),
-scheduling (--sched), priority, lock_memory (--mlock), strict, decoder, skip_deblock, realtime, speed,
-stream_wait_s, stream_timeout_s, trajectory_file (--out) with trajectory_format (--format),
-statistics_file (--stats), trace_file (--trace), progress.
-
-Runs without the GIL; Ctrl-C (KeyboardInterrupt) stops the run cleanly first. Raises voca.Error for
-bad input (a missing dataset or calibration, images that do not fit it: the CLI's message) and when a
-stage failed or no pose could be estimated; such an error carries .poses (the rows estimated before)
-and .summary.)doc");
+      py::kw_only(), py::arg("gt") = py::none(), py::arg("realtime") = false, py::arg("speed") = 1.0,
+      py::arg("stream_wait_s") = 30.0, py::arg("stream_timeout_s") = 3.0, py::arg("return_summary") = false,
+      run_doc.c_str());
 
   m.def("evaluate", &evaluateFiles, py::arg("gt"), py::arg("est"),
         R"doc(Evaluate an estimated trajectory file against ground truth, as `voca eval --gt GT --est EST` (the same

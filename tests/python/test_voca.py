@@ -180,6 +180,44 @@ def test_non_contiguous_images_are_copied_not_refused():
     assert odometry.poll().frame_index == 0
 
 
+SHARED_OPTIONS = ("config", "mode", "bridge_iframes", "max_points", "threads", "frontend_threads", "pins",
+                  "scheduling", "priority", "lock_memory", "strict", "decoder", "skip_deblock", "trajectory_file",
+                  "trajectory_format", "statistics_file", "trace_file", "progress")
+
+
+def test_odometry_and_run_take_the_same_options_under_the_cli_names(tmp_path, video):
+    for function in (voca.Odometry, voca.run):
+        for name in SHARED_OPTIONS:
+            assert f"\n  {name}=" in function.__doc__, (function, name)
+    assert "  max_points=1000 " in voca.run.__doc__ and "  scheduling='other' " in voca.Odometry.__doc__
+    # Given to Odometry, options reach the pipeline as the command line's flags do.
+    trajectory = tmp_path / "odometry.csv"
+    folder = voca.VideoFolder(video)
+    with voca.Odometry(folder.calibration_file, mode="none", max_points=300, threads=1,
+                       trajectory_file=trajectory, trajectory_format="euroc", bridge_iframes=None) as odometry:
+        for _, (t_ns, left, right) in zip(range(FRAMES), folder):
+            odometry.push_h264(t_ns, left, right)
+    rows = odometry.poses()
+    expected = cli_rows(tmp_path, video, "--frames", FRAMES, "--mode", "none", "--max-points", 300, "--threads", 1)
+    assert_same_rows(rows, expected)
+    assert len(trajectory.read_text().splitlines()) == FRAMES + 1  # EuRoC csv: a header, then a row per pose
+    # mode, config and threads by position in voca.run; the rows differ from the default mode's.
+    positional = voca.run(video, None, "none", None, None, FRAMES, 0, 1, max_points=300)
+    assert_same_rows(positional, expected)
+    assert not np.array_equal(positional, voca.run(video, max_frames=FRAMES))
+
+
+def test_an_unknown_option_or_a_wrong_type_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match=r"voca\.run\(\) got an unexpected keyword argument 'max_point'"):
+        voca.run(EUROC, CALIB, max_point=10)
+    with pytest.raises(TypeError, match=r"voca\.Odometry\(\): threads takes int, not float"):
+        voca.Odometry(CALIB, threads=1.5)
+    with pytest.raises(TypeError, match=r"voca\.run\(\): mode takes str, not int"):
+        voca.run(EUROC, CALIB, 3)
+    with pytest.raises(TypeError, match=r"voca\.Odometry\(\): trajectory_file takes str or os\.PathLike"):
+        voca.Odometry(CALIB, trajectory_file=7)
+
+
 def test_evaluate_equals_cli_json(tmp_path):
     estimate = tmp_path / "est.tum"
     voca.run(EUROC, CALIB, max_frames=FRAMES, trajectory_file=estimate)
