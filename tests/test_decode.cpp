@@ -17,6 +17,7 @@
 #include "drivers/decode/decoder_kind.h"
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "test_support.h"
 #include "voca/core/error.h"
 

@@ -11,6 +11,7 @@
 
 #include "drivers/decode/video_decoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "tests/test_alloc_counter.h"
 #include "tests/test_moving_texture.h"
 #include "tests/test_support.h"

@@ -13,6 +13,7 @@
 
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "test_support.h"
 #include "voca/core/error.h"

@@ -9,6 +9,7 @@
 #include <functional>
 
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "pipeline/bench/decode_bench.h"
 #include "test_support.h"
 

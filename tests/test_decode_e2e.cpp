@@ -11,6 +11,7 @@
 
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"
 #include "test_support.h"

@@ -18,6 +18,7 @@
 #include "drivers/decode/pixel_decoder.h"
 #include "drivers/decode/video_decoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "tests/test_moving_texture.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "tests/test_encode_probe.h"
 #include "tests/test_support.h"
 #include "voca/core/error.h"

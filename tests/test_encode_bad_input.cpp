@@ -6,6 +6,7 @@
 
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"
 #include "formats/image/png_io.h"

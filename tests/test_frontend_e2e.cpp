@@ -15,6 +15,7 @@
 #include "drivers/decode/video_reader.h"
 #include "drivers/encode/dataset_encoder.h"
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "formats/calib/calibration_io.h"
 #include "formats/config/config.h"
 #include "formats/dataset/dataset.h"

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "drivers/source/dataset_source.h"
 #include "drivers/source/looping_source.h"
 #include "formats/dataset/dataset.h"

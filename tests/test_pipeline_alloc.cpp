@@ -16,6 +16,7 @@
 #include <new>
 
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "drivers/source/dataset_source.h"
 #include "formats/calib/calibration_io.h"
 #include "formats/dataset/dataset.h"

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/encode/video_encoder.h"
+#include "drivers/encode/video_file_encoder.h"
 #include "formats/dataset/dataset.h"
 
 namespace voca::platform {

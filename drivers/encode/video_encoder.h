@@ -1,7 +1,6 @@
 #pragma once
-// Gray frames -> compressed video with libavcodec: a frame-by-frame encoder (live capture, in
-// software or on the device's hardware encoder) and a file encoder (datasets -> .mp4, two-pass
-// constant bitrate as the VOCA paper encodes).
+// Gray frames -> compressed video with libavcodec, frame by frame: live capture (in software or on
+// the device's hardware encoder) and each pass of a file encoding (video_file_encoder.h).
 
 #include <cstdint>
 #include <filesystem>
@@ -115,52 +114,5 @@ class VideoEncoder {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-// Writes one encoder's packets into an .mp4 file as they come (live recording). The file is complete
-// and playable after end().
-class Mp4Writer {
- public:
-  // Opens the file, so an unwritable path fails before any encoding (InputError).
-  explicit Mp4Writer(const std::filesystem::path& path);
-  ~Mp4Writer();
-  Mp4Writer(const Mp4Writer&) = delete;
-  Mp4Writer& operator=(const Mp4Writer&) = delete;
-
-  // Takes the stream parameters (size, rate, codec headers) from an open encoder opened with
-  // global_header = true, and writes the file header.
-  void begin(const VideoEncoder& encoder);
-  void write(const EncodedPacket& packet);
-  // Writes the index (moov) and closes the file; idempotent. Throws RuntimeFailure on write errors.
-  void end();
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
-
-// Called for each frame given to encodeVideoFile: pass (1-based), number of passes, frame index.
-using EncodeProgress = std::function<void(int pass, int num_passes, int frame_index)>;
-// Supplies the whole sequence, in order, by calling emit once per frame. It is called once per
-// pass, so it must produce the same frames each time.
-using FrameSource = std::function<void(const std::function<void(GrayView)>& emit)>;
-
-// What encodeVideoFile produced.
-struct EncodeResult {
-  int num_frames = 0;
-  int width = 0, height = 0;  // coded size
-  int num_keyframes = 0;
-  std::int64_t payload_bytes = 0;         // sum of the video packets
-  std::int64_t file_bytes = 0;            // the .mp4, container included
-  double duration_s = 0.0;                // num_frames / fps
-  double achieved_bitrate_bps = 0.0;      // payload_bytes * 8 / duration_s
-  std::vector<double> pass_ms_per_frame;  // encode wall time per frame, one entry per pass
-};
-
-// Encodes all frames of source into an .mp4 at path (created or overwritten), with pts = frame
-// index at settings' frame rate. Two passes when settings.two_pass (statistics in a temporary
-// folder that is removed afterwards). Throws InputError on an empty source, frames of different
-// sizes or an unwritable path; RuntimeFailure when libav fails.
-EncodeResult encodeVideoFile(const std::filesystem::path& path, const EncoderSettings& settings,
-                             const FrameSource& source, const EncodeProgress& progress = {});
 
 }  // namespace voca::encode

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "drivers/encode/live_encoder.h"
-#include "drivers/encode/video_encoder.h"
+#include "drivers/encode/mp4_writer.h"
 #include "drivers/source/stereo_source.h"
 
 namespace voca::encode {
