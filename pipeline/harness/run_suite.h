@@ -1,8 +1,8 @@
 #pragma once
 // Running a suite's plan: renderings and encodings once (cached in the output folder), then every run
 // as a child `voca run` process (so a crash of one run is recorded as x and the suite goes on), up to
-// `jobs` at a time, skipping what a previous call finished; and collecting the results into the
-// paper's tables.
+// `jobs` at a time, skipping what a previous call finished; each run's result (collect_results.h
+// makes the tables).
 
 #include <cstdint>
 #include <filesystem>
@@ -48,11 +48,5 @@ nlohmann::json summariseRun(const PlannedRun& run, const std::optional<platform:
 // The longest stretch of frames tracked without a reset, a loss or a gap, as a fraction of the frames
 // (the paper's R rule), from the stats.json frame rows.
 double resetFreeFraction(const nlohmann::json& statistics);
-
-// What `voca bench collect` and the end of `voca bench suite` do: reads <out>/suite.json and every
-// run's result.json (summarising runs that have outputs but no result.json, as cluster jobs leave
-// them), evaluates the external trajectories, and writes tables/<bitrate>.{md,csv,tex},
-// summary.{md,csv} and results.csv into out. Returns the paths written.
-std::vector<std::filesystem::path> collectResults(const std::filesystem::path& out, const std::string& voca_executable);
 
 }  // namespace voca::harness

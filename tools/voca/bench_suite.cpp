@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "pipeline/harness/collect_results.h"
 #include "pipeline/harness/run_suite.h"
 #include "pipeline/harness/suite.h"
 #include "platform/process/child_process.h"
