@@ -50,6 +50,8 @@ py::object makeError(const std::string& message, const char* kind) {
 
 std::string pathText(const OptionalPath& path) { return path ? path->string() : std::string(); }
 
+std::string typeName(const py::handle& value) { return py::str(py::type::handle_of(value).attr("__name__")); }
+
 // The eight numbers of the TUM row `voca run --out` writes for the pose, read back from the very text
 // voca_rt::tumRow formats: the time as its nine-decimal seconds read as a double (a nanosecond count
 // of today's epoch exceeds 2^53, so t_ns / 1e9 could differ in the last bit), and the shortest exact

@@ -32,6 +32,9 @@ py::object makeError(const std::string& message, const char* kind);
 
 std::string pathText(const OptionalPath& path);
 
+// The name of a Python value's type, for TypeError messages: "float", "str".
+std::string typeName(const py::handle& value);
+
 // The eight numbers of the TUM row `voca run --out` writes for the pose, bit for bit.
 TumValues tumValues(const voca_rt::Pose& pose);
 py::array_t<double> tumArray(const std::vector<TumValues>& rows);

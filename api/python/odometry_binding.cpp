@@ -25,8 +25,7 @@ class ByteView {
   ByteView(const py::handle& object, const char* name) {
     if (PyObject_GetBuffer(object.ptr(), &view_, PyBUF_C_CONTIGUOUS) != 0) {
       PyErr_Clear();
-      throw py::type_error(std::string(name) + ": expected bytes (one H.264 access unit), got " +
-                           std::string(py::str(py::type::handle_of(object).attr("__name__"))));
+      throw py::type_error(std::string(name) + ": expected bytes (one H.264 access unit), got " + typeName(object));
     }
   }
   ~ByteView() { PyBuffer_Release(&view_); }

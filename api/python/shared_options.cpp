@@ -10,6 +10,8 @@
 #include <string>
 #include <type_traits>
 
+#include "conversions.h"
+
 namespace py = pybind11;
 
 namespace voca_python {
@@ -90,8 +92,6 @@ const std::array kSharedOptions = {
     pathOption<&Options::trace_file>("trace_file", "Chrome trace of every frame's stages (--trace)"),
     valueOption<&Options::progress>("progress", "progress lines on stderr"),
 };
-
-std::string typeName(const py::handle& value) { return py::str(py::type::handle_of(value).attr("__name__")); }
 
 }  // namespace
 
